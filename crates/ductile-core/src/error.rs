@@ -1,0 +1,118 @@
+//! The error type of `ductile-core`.
+
+use thiserror::Error;
+
+/// Everything that can go wrong when building meshes, binding tools or evaluating a stack.
+///
+/// Every variant carries the place (`what`: a human-readable path such as
+/// `"control point 2 of tool 'nose'"`) and the problem, so callers can show it as it is.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum CoreError {
+    /// A mesh has no vertices or no triangles.
+    #[error("{what}: the mesh is empty ({vertices} vertices, {triangles} triangles)")]
+    EmptyMesh {
+        /// Which mesh.
+        what: String,
+        /// Vertex count found.
+        vertices: usize,
+        /// Triangle count found.
+        triangles: usize,
+    },
+    /// The index buffer length is not a multiple of three.
+    #[error("{what}: index count {count} is not a multiple of 3")]
+    RaggedIndices {
+        /// Which mesh.
+        what: String,
+        /// Index count found.
+        count: usize,
+    },
+    /// A triangle refers to a vertex that does not exist.
+    #[error(
+        "{what}: triangle {triangle} refers to vertex {index}, but there are only {vertices} vertices"
+    )]
+    IndexOutOfRange {
+        /// Which mesh.
+        what: String,
+        /// Triangle number (0-based).
+        triangle: usize,
+        /// The offending index.
+        index: u32,
+        /// Vertex count.
+        vertices: usize,
+    },
+    /// A per-vertex attribute has the wrong length.
+    #[error("{what}: {attribute} has {found} entries but the mesh has {expected} vertices")]
+    AttributeLength {
+        /// Which mesh.
+        what: String,
+        /// Attribute name (`normals`, `uvs`).
+        attribute: &'static str,
+        /// Entries found.
+        found: usize,
+        /// Entries expected.
+        expected: usize,
+    },
+    /// A number is NaN or infinite.
+    #[error("{what}: {value} is not a finite number")]
+    NotFinite {
+        /// Which parameter.
+        what: String,
+        /// The value, as printed.
+        value: String,
+    },
+    /// A parameter is outside its domain.
+    #[error("{what} = {value} is out of range: {expected}")]
+    OutOfRange {
+        /// Which parameter.
+        what: String,
+        /// The value found.
+        value: f64,
+        /// The allowed domain, in words (for example "must be > 0").
+        expected: &'static str,
+    },
+    /// A tool or volume is geometrically degenerate (zero-volume frame, zero-size support, ...).
+    #[error("{what}: {problem}")]
+    Degenerate {
+        /// Which tool or volume.
+        what: String,
+        /// What is degenerate.
+        problem: String,
+    },
+    /// A vertex index given by the user (an area, a constraint) does not exist.
+    #[error("{what}: vertex {index} does not exist (the mesh has {vertices} vertices)")]
+    NoSuchVertex {
+        /// Which area or constraint.
+        what: String,
+        /// The index.
+        index: u32,
+        /// Vertex count.
+        vertices: usize,
+    },
+}
+
+/// Shorthand for results in this crate.
+pub type Result<T, E = CoreError> = std::result::Result<T, E>;
+
+/// Returns an error naming `what` when `value` is NaN or infinite.
+pub fn check_finite(what: impl FnOnce() -> String, value: f32) -> Result<()> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(CoreError::NotFinite {
+            what: what(),
+            value: value.to_string(),
+        })
+    }
+}
+
+/// Returns an error naming `what` when any component of `v` is NaN or infinite.
+pub fn check_finite_vec3(what: impl FnOnce() -> String, v: glam::Vec3) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(CoreError::NotFinite {
+            what: what(),
+            value: format!("{v}"),
+        })
+    }
+}

@@ -1,0 +1,322 @@
+//! Influence: which vertices a layer may move, and how strongly.
+//!
+//! An [`Influence`] combines an optional named vertex area (resolved to welded vertex
+//! indices) with optional influence volumes. Its per-vertex weight is
+//!
+//! `w(v) = a(v) · g(v)`, where `a(v) ∈ {0, 1}` is area membership (1 when there is no area)
+//! and `g(v)` is the union (maximum) of the volumes' falloff weights (1 when there are no
+//! volumes). With `invert`, `g` becomes `1 − g`: the area minus the volumes.
+//!
+//! Only vertices with `w(v) > 0` are handed to the tool at all (the FFSD paper's "area of
+//! influence" speed-up); all others keep their input position bit for bit.
+
+use glam::{Affine3A, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{CoreError, Result, check_finite};
+
+/// The shape of an influence volume in its own local frame (centred at the origin).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Shape {
+    /// A ball of the given radius.
+    Sphere {
+        /// Radius (> 0).
+        radius: f32,
+    },
+    /// An axis-aligned box (in the local frame) with the given half extents.
+    Box {
+        /// Half extents along local X, Y, Z (each > 0).
+        half_extents: Vec3,
+    },
+    /// A capsule around the local Y axis from `−half_height` to `+half_height`.
+    Capsule {
+        /// Radius (> 0).
+        radius: f32,
+        /// Half the length of the axis segment (≥ 0).
+        half_height: f32,
+    },
+}
+
+impl Shape {
+    /// Normalised distance of a local point: 0 at the centre (or axis), 1 on the boundary,
+    /// above 1 outside. For the box it is the largest of `|x|/hx, |y|/hy, |z|/hz`.
+    #[must_use]
+    pub fn normalized_distance(&self, local: Vec3) -> f32 {
+        match *self {
+            Shape::Sphere { radius } => local.length() / radius,
+            Shape::Box { half_extents } => (local.abs() / half_extents).max_element(),
+            Shape::Capsule {
+                radius,
+                half_height,
+            } => {
+                let axis = Vec3::new(0.0, local.y.clamp(-half_height, half_height), 0.0);
+                (local - axis).length() / radius
+            }
+        }
+    }
+
+    /// Checks the shape's sizes (finite and positive). `what` names the volume in errors.
+    pub fn validate(&self, what: &str) -> Result<()> {
+        let positive = |name: &str, v: f32| -> Result<()> {
+            check_finite(|| format!("{what}: {name}"), v)?;
+            if v <= 0.0 {
+                return Err(CoreError::OutOfRange {
+                    what: format!("{what}: {name}"),
+                    value: f64::from(v),
+                    expected: "must be > 0",
+                });
+            }
+            Ok(())
+        };
+        match *self {
+            Shape::Sphere { radius } => positive("radius", radius),
+            Shape::Box { half_extents } => {
+                positive("half_extents.x", half_extents.x)?;
+                positive("half_extents.y", half_extents.y)?;
+                positive("half_extents.z", half_extents.z)
+            }
+            Shape::Capsule {
+                radius,
+                half_height,
+            } => {
+                positive("radius", radius)?;
+                check_finite(|| format!("{what}: half_height"), half_height)?;
+                if half_height < 0.0 {
+                    return Err(CoreError::OutOfRange {
+                        what: format!("{what}: half_height"),
+                        value: f64::from(half_height),
+                        expected: "must be >= 0",
+                    });
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// How the weight falls from 1 to 0 between the inner part of a volume and its boundary.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Falloff {
+    /// Weight 1 everywhere inside the volume, 0 outside.
+    None,
+    /// Weight falls linearly with normalised distance.
+    Linear,
+    /// Weight falls along the smoothstep `s²(3 − 2s)`: zero slope at both ends.
+    #[default]
+    Smooth,
+}
+
+impl Falloff {
+    /// Weight at normalised distance `t`, with full weight up to `inner` (in `[0, 1)`):
+    /// `s = (1 − t) / (1 − inner)` clamped to `[0, 1]`, then `None → [t ≤ 1]`, `Linear → s`,
+    /// `Smooth → s²(3 − 2s)`.
+    #[must_use]
+    pub fn weight(self, t: f32, inner: f32) -> f32 {
+        if t > 1.0 {
+            return 0.0;
+        }
+        if t <= inner {
+            return 1.0;
+        }
+        let s = ((1.0 - t) / (1.0 - inner)).clamp(0.0, 1.0);
+        match self {
+            Falloff::None => 1.0,
+            Falloff::Linear => s,
+            Falloff::Smooth => s * s * (3.0 - 2.0 * s),
+        }
+    }
+}
+
+/// An influence volume placed in mesh space.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Volume {
+    /// The volume's shape in its local frame.
+    pub shape: Shape,
+    /// Mesh space → the volume's local frame (the inverse of its placement).
+    pub to_local: Affine3A,
+}
+
+impl Volume {
+    /// A volume whose local frame is placed in mesh space by `placement`. Fails when the
+    /// placement is singular or the shape invalid.
+    pub fn new(shape: Shape, placement: Affine3A, what: &str) -> Result<Self> {
+        shape.validate(what)?;
+        let det = placement.matrix3.determinant();
+        if !det.is_finite() || det.abs() < 1e-12 {
+            return Err(CoreError::Degenerate {
+                what: what.to_owned(),
+                problem: format!("its transform is singular (determinant {det})"),
+            });
+        }
+        Ok(Self {
+            shape,
+            to_local: placement.inverse(),
+        })
+    }
+
+    /// Normalised distance of a mesh-space point (see [`Shape::normalized_distance`]).
+    #[must_use]
+    pub fn normalized_distance(&self, p: Vec3) -> f32 {
+        self.shape
+            .normalized_distance(self.to_local.transform_point3(p))
+    }
+}
+
+/// A layer's influence, resolved to mesh space and welded vertex indices.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Influence {
+    /// Volumes (their union); empty means "no volume restriction".
+    pub volumes: Vec<Volume>,
+    /// Sorted welded vertex indices of the named area, if any.
+    pub area: Option<Vec<u32>>,
+    /// Falloff shape inside the volumes.
+    pub falloff: Falloff,
+    /// Normalised distance up to which the weight stays 1, in `[0, 1)`.
+    pub inner: f32,
+    /// Use `1 − g` for the volume part (the area minus the volumes).
+    pub invert: bool,
+}
+
+/// The vertices a layer acts on and their weights in `(0, 1]`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Mask {
+    /// Welded vertex indices, ascending.
+    pub indices: Vec<u32>,
+    /// Weight of each vertex in `indices`.
+    pub weights: Vec<f32>,
+}
+
+impl Mask {
+    /// Every vertex with weight 1.
+    #[must_use]
+    pub fn all(count: usize) -> Self {
+        Self {
+            indices: (0..count as u32).collect(),
+            weights: vec![1.0; count],
+        }
+    }
+
+    /// Number of active vertices.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// True when no vertex is active.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.indices.is_empty()
+    }
+}
+
+impl Influence {
+    /// Weight `g(v)` of the volume part at `p` (1 when there are no volumes), inverted when
+    /// asked.
+    #[must_use]
+    pub fn volume_weight(&self, p: Vec3) -> f32 {
+        if self.volumes.is_empty() {
+            return 1.0;
+        }
+        let g = self
+            .volumes
+            .iter()
+            .map(|v| self.falloff.weight(v.normalized_distance(p), self.inner))
+            .fold(0.0_f32, f32::max);
+        if self.invert { 1.0 - g } else { g }
+    }
+
+    /// The mask over `positions` (welded, the layer's input): every vertex with `w(v) > 0`.
+    #[must_use]
+    pub fn mask(&self, positions: &[Vec3]) -> Mask {
+        let mut mask = Mask::default();
+        let mut push = |i: u32| {
+            let w = self.volume_weight(positions[i as usize]);
+            if w > 0.0 {
+                mask.indices.push(i);
+                mask.weights.push(w);
+            }
+        };
+        match &self.area {
+            Some(area) => area
+                .iter()
+                .copied()
+                .filter(|&i| (i as usize) < positions.len())
+                .for_each(&mut push),
+            None => (0..positions.len() as u32).for_each(&mut push),
+        }
+        mask
+    }
+
+    /// Checks `inner` and every volume. `what` names the layer in errors.
+    pub fn validate(&self, what: &str) -> Result<()> {
+        check_finite(|| format!("{what}: influence inner"), self.inner)?;
+        if !(0.0..1.0).contains(&self.inner) {
+            return Err(CoreError::OutOfRange {
+                what: format!("{what}: influence inner"),
+                value: f64::from(self.inner),
+                expected: "must be in [0, 1)",
+            });
+        }
+        for (i, v) in self.volumes.iter().enumerate() {
+            v.shape.validate(&format!("{what}: volume {i}"))?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn falloff_shapes() {
+        assert_eq!(Falloff::None.weight(0.99, 0.0), 1.0);
+        assert_eq!(Falloff::None.weight(1.01, 0.0), 0.0);
+        assert!((Falloff::Linear.weight(0.75, 0.5) - 0.5).abs() < 1e-6);
+        assert!((Falloff::Smooth.weight(0.5, 0.0) - 0.5).abs() < 1e-6);
+        assert_eq!(Falloff::Smooth.weight(0.2, 0.3), 1.0);
+    }
+
+    #[test]
+    fn shapes_measure_normalised_distance() {
+        let s = Shape::Sphere { radius: 2.0 };
+        assert!((s.normalized_distance(Vec3::new(0.0, 1.0, 0.0)) - 0.5).abs() < 1e-6);
+        let b = Shape::Box {
+            half_extents: Vec3::new(1.0, 2.0, 4.0),
+        };
+        assert!((b.normalized_distance(Vec3::new(0.5, 1.8, 1.0)) - 0.9).abs() < 1e-6);
+        let c = Shape::Capsule {
+            radius: 1.0,
+            half_height: 2.0,
+        };
+        assert!((c.normalized_distance(Vec3::new(0.5, 1.5, 0.0)) - 0.5).abs() < 1e-6);
+        assert!((c.normalized_distance(Vec3::new(0.0, 3.0, 0.0)) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn area_times_inverted_volume() {
+        let positions: Vec<Vec3> = (0..5).map(|i| Vec3::new(i as f32, 0.0, 0.0)).collect();
+        let vol = Volume::new(Shape::Sphere { radius: 1.5 }, Affine3A::IDENTITY, "v").unwrap();
+        let inf = Influence {
+            volumes: vec![vol],
+            area: Some(vec![0, 1, 2, 3]),
+            falloff: Falloff::None,
+            inner: 0.0,
+            invert: true,
+        };
+        let m = inf.mask(&positions);
+        assert_eq!(m.indices, vec![2, 3]);
+        assert_eq!(m.weights, vec![1.0, 1.0]);
+    }
+
+    #[test]
+    fn singular_volume_is_refused() {
+        let e = Volume::new(
+            Shape::Sphere { radius: 1.0 },
+            Affine3A::from_scale(Vec3::new(1.0, 0.0, 1.0)),
+            "v",
+        );
+        assert!(matches!(e, Err(CoreError::Degenerate { .. })));
+        assert!(Shape::Sphere { radius: -1.0 }.validate("s").is_err());
+    }
+}

@@ -1,0 +1,27 @@
+//! `ductile-core`: meshes, influence, deformation tools and the non-destructive deformation
+//! stack of Ductile.
+//!
+//! The crate is pure computation: no engine, no UI, no file I/O (see
+//! `docs/ARCHITECTURE.md`). A [`RestMesh`](mesh::RestMesh) holds a validated mesh and its
+//! welded topology; a [`Stack`](stack::Stack) of [`Layer`](stack::Layer)s, each with a
+//! [`Tool`](tool::Tool) and an optional [`Influence`](influence::Influence), maps it to
+//! [`Deformed`](mesh::Deformed) positions and normals.
+
+pub mod basis;
+pub mod error;
+pub mod ffsd;
+pub mod influence;
+pub mod mesh;
+pub mod normals;
+pub mod stack;
+pub mod tool;
+
+/// The types most users need.
+pub mod prelude {
+    pub use crate::error::{CoreError, Result};
+    pub use crate::ffsd::{ControlPoint, FfsdMacro, FfsdTool, HeightLimit, PointMode};
+    pub use crate::influence::{Falloff, Influence, Mask, Shape, Volume};
+    pub use crate::mesh::{Deformed, Mesh, RestMesh, Topology};
+    pub use crate::stack::{Layer, LayerBinding, Stack};
+    pub use crate::tool::{BindInput, Deformer, Tool, ToolBind};
+}

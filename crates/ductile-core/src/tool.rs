@@ -1,0 +1,133 @@
+//! The deformer abstraction and the [`Tool`] enum of every tool kind.
+//!
+//! Every tool follows the same two-step protocol:
+//!
+//! 1. **bind** — compute cached data from the layer's *input* (the positions coming out of the
+//!    layer below, the welded topology, the active vertices of the layer's influence) and the
+//!    tool's rest state. A bind is recomputed only when one of those inputs changes.
+//! 2. **deform** — map each active vertex to its deformed position, using the bind. This is
+//!    pure and per vertex, so the stack may split the active set into chunks and deform them
+//!    in parallel.
+//!
+//! Tools are plain serialisable data, always given in the space of the mesh they deform.
+
+use glam::{Affine3A, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::error::Result;
+use crate::ffsd::{FfsdBind, FfsdTool};
+use crate::mesh::Topology;
+
+/// What a tool sees when it binds: the layer's input.
+#[derive(Debug, Clone, Copy)]
+pub struct BindInput<'a> {
+    /// Welded positions entering the layer (mesh space).
+    pub positions: &'a [Vec3],
+    /// Welded topology of the mesh.
+    pub topology: &'a Topology,
+    /// Active (influenced) welded vertex indices, ascending and non-empty.
+    pub active: &'a [u32],
+}
+
+/// A deformation tool: the bind / deform protocol described in the module documentation.
+pub trait Deformer {
+    /// Cached data computed by [`Deformer::bind`].
+    type Bind: Send + Sync + std::fmt::Debug;
+
+    /// Checks every parameter (finite, in its domain, not degenerate). `what` names the tool.
+    fn validate(&self, what: &str) -> Result<()>;
+
+    /// Computes the bind from the layer input. Called only on a validated tool.
+    fn bind(&self, input: &BindInput<'_>) -> Result<Self::Bind>;
+
+    /// Writes the deformed position of each vertex of `active` (a sub-slice of the bound
+    /// active set) into `out` (same length). `positions` is the layer input the bind saw.
+    fn deform(&self, bind: &Self::Bind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]);
+
+    /// The same tool expressed in another space: `m` maps the tool's space to the target.
+    #[must_use]
+    fn transformed(&self, m: &Affine3A) -> Self;
+
+    /// True when `other` has the same rest state, so that a bind made for `self` is valid for
+    /// `other` too. The default compares nothing and always re-binds.
+    fn same_rest_state(&self, _other: &Self) -> bool {
+        false
+    }
+}
+
+/// Every deformation tool Ductile has, as a stack layer's tool.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Tool {
+    /// FFSD control points (Yoshizawa et al. 2002; Martínek & Kolingerová 2014).
+    Ffsd(FfsdTool),
+}
+
+/// The bind of a [`Tool`].
+#[derive(Debug)]
+pub enum ToolBind {
+    /// Bind of [`Tool::Ffsd`].
+    Ffsd(FfsdBind),
+}
+
+impl Tool {
+    /// A short name of the tool kind, for messages and UI.
+    #[must_use]
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Tool::Ffsd(_) => "FFSD control points",
+        }
+    }
+
+    /// See [`Deformer::validate`].
+    pub fn validate(&self, what: &str) -> Result<()> {
+        match self {
+            Tool::Ffsd(t) => t.validate(what),
+        }
+    }
+
+    /// See [`Deformer::bind`].
+    pub fn bind(&self, input: &BindInput<'_>) -> Result<ToolBind> {
+        Ok(match self {
+            Tool::Ffsd(t) => ToolBind::Ffsd(t.bind(input)?),
+        })
+    }
+
+    /// See [`Deformer::deform`]. A bind of another kind deforms nothing (`out` keeps the
+    /// input positions); the stack never pairs them that way.
+    pub fn deform(&self, bind: &ToolBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
+        match (self, bind) {
+            (Tool::Ffsd(t), ToolBind::Ffsd(b)) => t.deform(b, positions, active, out),
+            #[allow(unreachable_patterns)]
+            _ => {
+                for (o, &i) in out.iter_mut().zip(active) {
+                    *o = positions[i as usize];
+                }
+            }
+        }
+    }
+
+    /// See [`Deformer::transformed`].
+    #[must_use]
+    pub fn transformed(&self, m: &Affine3A) -> Self {
+        match self {
+            Tool::Ffsd(t) => Tool::Ffsd(t.transformed(m)),
+        }
+    }
+
+    /// See [`Deformer::same_rest_state`].
+    #[must_use]
+    pub fn same_rest_state(&self, other: &Self) -> bool {
+        match (self, other) {
+            (Tool::Ffsd(a), Tool::Ffsd(b)) => a.same_rest_state(b),
+            #[allow(unreachable_patterns)]
+            _ => false,
+        }
+    }
+}
+
+/// The uniform scale factor of an affine map (cube root of `|det|`), used to carry lengths
+/// such as radii into another space.
+#[must_use]
+pub fn uniform_scale(m: &Affine3A) -> f32 {
+    m.matrix3.determinant().abs().cbrt()
+}

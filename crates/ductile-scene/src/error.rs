@@ -1,0 +1,113 @@
+//! The error type of `ductile-scene`.
+
+use ductile_core::error::CoreError;
+use thiserror::Error;
+
+/// A problem with a scene document. Each variant names the node, layer or area concerned.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SceneError {
+    /// Two nodes share a name (names identify nodes).
+    #[error("node name '{name}' is used more than once")]
+    DuplicateName {
+        /// The name.
+        name: String,
+    },
+    /// A node name is empty.
+    #[error("node {index} has an empty name")]
+    EmptyName {
+        /// Position of the node in the document.
+        index: usize,
+    },
+    /// No node has this name.
+    #[error("there is no node named '{name}'")]
+    NoSuchNode {
+        /// The name looked up.
+        name: String,
+    },
+    /// A node's parent does not exist.
+    #[error("node '{node}' has parent '{parent}', which does not exist")]
+    UnknownParent {
+        /// The child.
+        node: String,
+        /// The missing parent.
+        parent: String,
+    },
+    /// Following parents from a node comes back to it.
+    #[error("node '{node}' is its own ancestor (cycle in the scene graph)")]
+    Cycle {
+        /// A node on the cycle.
+        node: String,
+    },
+    /// A node is not of the kind an operation or reference needs.
+    #[error("node '{node}' is a {found}, not a {expected}")]
+    WrongKind {
+        /// The node.
+        node: String,
+        /// Its kind.
+        found: &'static str,
+        /// The kind needed.
+        expected: &'static str,
+    },
+    /// A layer names a tool that does not exist.
+    #[error("mesh '{mesh}', layer {layer}: tool '{tool}' does not exist")]
+    UnknownTool {
+        /// The mesh.
+        mesh: String,
+        /// Layer index (0 = bottom).
+        layer: usize,
+        /// The missing tool name.
+        tool: String,
+    },
+    /// A layer's influence names a volume that does not exist.
+    #[error("mesh '{mesh}', layer {layer}: influence volume '{volume}' does not exist")]
+    UnknownVolume {
+        /// The mesh.
+        mesh: String,
+        /// Layer index.
+        layer: usize,
+        /// The missing volume name.
+        volume: String,
+    },
+    /// A layer's influence or a macro names an area the mesh does not have.
+    #[error("mesh '{mesh}', layer {layer}: area '{area}' is not defined on this mesh")]
+    UnknownArea {
+        /// The mesh.
+        mesh: String,
+        /// Layer index.
+        layer: usize,
+        /// The missing area.
+        area: String,
+    },
+    /// A macro node names a macro that is not in the document's library.
+    #[error("macro node '{node}': there is no macro named '{name}'")]
+    UnknownMacro {
+        /// The node.
+        node: String,
+        /// The missing macro.
+        name: String,
+    },
+    /// A number is NaN or infinite.
+    #[error("{what}: {value} is not a finite number")]
+    NotFinite {
+        /// Which value.
+        what: String,
+        /// The value as printed.
+        value: String,
+    },
+    /// An index (layer, area vertex, position) is out of range.
+    #[error("{what}: index {index} is out of range (there are {len})")]
+    IndexOutOfRange {
+        /// What was indexed.
+        what: String,
+        /// The index.
+        index: usize,
+        /// The length.
+        len: usize,
+    },
+    /// A parameter is invalid according to `ductile-core`.
+    #[error(transparent)]
+    Core(#[from] CoreError),
+}
+
+/// Shorthand for results in this crate.
+pub type Result<T, E = SceneError> = std::result::Result<T, E>;

@@ -1,0 +1,23 @@
+//! `ductile-scene`: the scene document of Ductile — a graph of named nodes (meshes, tools,
+//! macro tools, influence volumes, groups), one deformation stack per mesh, named vertex
+//! areas and the macro library.
+//!
+//! The [`Document`](document::Document) is the single source of truth: the history edits
+//! it, the CLI and the Studio read it, and [`Document::evaluate`](document::Document)
+//! turns it into deformed meshes through `ductile-core`.
+
+pub mod document;
+pub mod error;
+pub mod resolve;
+pub mod transform;
+pub mod validate;
+
+/// The types most users need.
+pub mod prelude {
+    pub use crate::document::{
+        Area, Document, InfluenceSpec, LayerSpec, MacroUse, MeshNode, Node, NodeKind, RegionShape,
+        VolumeNode,
+    };
+    pub use crate::error::{Result, SceneError};
+    pub use crate::transform::Transform;
+}

@@ -1,0 +1,185 @@
+//! From the document to core's evaluable [`Stack`]: world transforms, tools and volumes in
+//! mesh space, areas as welded vertex sets.
+
+use glam::Affine3A;
+
+use ductile_core::influence::{Influence, Volume};
+use ductile_core::mesh::{Deformed, RestMesh};
+use ductile_core::stack::{Layer, Stack};
+use ductile_core::tool::Tool;
+
+use crate::document::{Area, Document, NodeKind, wrong_kind};
+use crate::error::{Result, SceneError};
+
+impl Document {
+    /// The node's world transform (product of its ancestors' local transforms).
+    pub fn world_transform(&self, name: &str) -> Result<Affine3A> {
+        let mut m = Affine3A::IDENTITY;
+        let mut current = Some(name.to_owned());
+        let mut steps = 0;
+        while let Some(c) = current {
+            let node = self.node(&c)?;
+            m = node.transform.affine() * m;
+            current = node.parent.clone();
+            steps += 1;
+            if steps > self.nodes.len() {
+                return Err(SceneError::Cycle {
+                    node: name.to_owned(),
+                });
+            }
+        }
+        Ok(m)
+    }
+
+    /// The tool of a tool or macro node, in the node's local frame.
+    pub fn tool(&self, name: &str) -> Result<Tool> {
+        let node = self.node(name)?;
+        match &node.kind {
+            NodeKind::Tool(t) => Ok(t.clone()),
+            NodeKind::Macro(m) => {
+                let def = self
+                    .macros
+                    .get(&m.name)
+                    .ok_or_else(|| SceneError::UnknownMacro {
+                        node: name.to_owned(),
+                        name: m.name.clone(),
+                    })?;
+                Ok(Tool::Ffsd(def.tool(m.value)))
+            }
+            other => Err(wrong_kind(name, other, "tool")),
+        }
+    }
+
+    /// Map from `node`'s local frame to `mesh`'s local frame.
+    pub fn to_mesh_space(&self, node: &str, mesh: &str) -> Result<Affine3A> {
+        Ok(self.world_transform(mesh)?.inverse() * self.world_transform(node)?)
+    }
+
+    /// The welded vertex indices (sorted, unique) of area `area` of mesh `mesh`, whose rest
+    /// mesh is `rest`.
+    pub fn area_vertices(&self, mesh: &str, area: &str, rest: &RestMesh) -> Result<Vec<u32>> {
+        let def = self
+            .mesh(mesh)?
+            .areas
+            .get(area)
+            .ok_or_else(|| SceneError::UnknownArea {
+                mesh: mesh.to_owned(),
+                layer: 0,
+                area: area.to_owned(),
+            })?;
+        resolve_area(def, rest, &format!("mesh '{mesh}', area '{area}'"))
+    }
+
+    /// Resolves the stack of mesh `mesh` against its rest mesh.
+    pub fn resolve_stack(&self, mesh: &str, rest: &RestMesh) -> Result<Stack> {
+        let node = self.mesh(mesh)?;
+        let mut layers = Vec::with_capacity(node.stack.len());
+        for (i, spec) in node.stack.iter().enumerate() {
+            let tool_node = self.node(&spec.tool).map_err(|_| SceneError::UnknownTool {
+                mesh: mesh.to_owned(),
+                layer: i,
+                tool: spec.tool.clone(),
+            })?;
+            if !tool_node.kind.is_tool() {
+                return Err(wrong_kind(&spec.tool, &tool_node.kind, "tool"));
+            }
+            let tool = self
+                .tool(&spec.tool)?
+                .transformed(&self.to_mesh_space(&spec.tool, mesh)?);
+            let influence = match &spec.influence {
+                None => None,
+                Some(inf) => {
+                    let mut volumes = Vec::with_capacity(inf.volumes.len());
+                    for v in &inf.volumes {
+                        let vnode = self.node(v).map_err(|_| SceneError::UnknownVolume {
+                            mesh: mesh.to_owned(),
+                            layer: i,
+                            volume: v.clone(),
+                        })?;
+                        let NodeKind::Volume(vol) = &vnode.kind else {
+                            return Err(wrong_kind(v, &vnode.kind, "volume"));
+                        };
+                        let placement = self.to_mesh_space(v, mesh)?;
+                        volumes.push(Volume::new(vol.shape, placement, &format!("volume '{v}'"))?);
+                    }
+                    let area = match &inf.area {
+                        None => None,
+                        Some(a) => {
+                            let def = node.areas.get(a).ok_or_else(|| SceneError::UnknownArea {
+                                mesh: mesh.to_owned(),
+                                layer: i,
+                                area: a.clone(),
+                            })?;
+                            Some(resolve_area(
+                                def,
+                                rest,
+                                &format!("mesh '{mesh}', area '{a}'"),
+                            )?)
+                        }
+                    };
+                    Some(Influence {
+                        volumes,
+                        area,
+                        falloff: inf.falloff,
+                        inner: inf.inner,
+                        invert: inf.invert,
+                    })
+                }
+            };
+            layers.push(Layer {
+                name: spec.tool.clone(),
+                tool,
+                influence,
+                weight: spec.weight,
+                enabled: spec.enabled,
+            });
+        }
+        Ok(Stack { layers })
+    }
+
+    /// Resolves and evaluates the stack of mesh `mesh` on `rest`.
+    pub fn evaluate(&self, mesh: &str, rest: &RestMesh) -> Result<Deformed> {
+        Ok(self.resolve_stack(mesh, rest)?.evaluate(rest)?)
+    }
+}
+
+/// Resolves an area definition to sorted, unique welded vertex indices.
+pub fn resolve_area(area: &Area, rest: &RestMesh, what: &str) -> Result<Vec<u32>> {
+    let topo = rest.topology();
+    let mut out: Vec<u32> = match area {
+        Area::Vertices(stored) => {
+            let mut v = Vec::with_capacity(stored.len());
+            for &i in stored {
+                let w = topo
+                    .weld
+                    .get(i as usize)
+                    .ok_or_else(|| SceneError::IndexOutOfRange {
+                        what: format!("{what}: vertex"),
+                        index: i as usize,
+                        len: topo.stored_count(),
+                    })?;
+                v.push(*w);
+            }
+            v
+        }
+        Area::Region(shapes) => {
+            let mut vols = Vec::with_capacity(shapes.len());
+            for (k, s) in shapes.iter().enumerate() {
+                vols.push(Volume::new(
+                    s.shape,
+                    s.transform.affine(),
+                    &format!("{what}: shape {k}"),
+                )?);
+            }
+            rest.welded_positions()
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| vols.iter().any(|v| v.normalized_distance(**p) <= 1.0))
+                .map(|(i, _)| i as u32)
+                .collect()
+        }
+    };
+    out.sort_unstable();
+    out.dedup();
+    Ok(out)
+}

@@ -1,0 +1,172 @@
+//! Whole-document validation: every problem, not just the first.
+
+use std::collections::HashSet;
+
+use ductile_core::error::CoreError;
+
+use crate::document::{Area, Document, NodeKind};
+use crate::error::SceneError;
+
+impl Document {
+    /// Every problem of the document that can be found without loading meshes: names,
+    /// parents and cycles, finite transforms, layer references (tools, volumes, areas),
+    /// macro references, and every tool, volume, influence and macro parameter.
+    #[must_use]
+    pub fn problems(&self) -> Vec<SceneError> {
+        let mut out = Vec::new();
+        let mut seen = HashSet::new();
+        for (i, n) in self.nodes.iter().enumerate() {
+            if n.name.is_empty() {
+                out.push(SceneError::EmptyName { index: i });
+            } else if !seen.insert(n.name.as_str()) {
+                out.push(SceneError::DuplicateName {
+                    name: n.name.clone(),
+                });
+            }
+        }
+        for n in &self.nodes {
+            if let Some(p) = &n.parent {
+                if self.index_of(p).is_none() {
+                    out.push(SceneError::UnknownParent {
+                        node: n.name.clone(),
+                        parent: p.clone(),
+                    });
+                } else if self.is_ancestor(&n.name, p) {
+                    out.push(SceneError::Cycle {
+                        node: n.name.clone(),
+                    });
+                }
+            }
+            if !n.transform.is_finite() {
+                out.push(SceneError::NotFinite {
+                    what: format!("node '{}': transform", n.name),
+                    value: format!("{:?}", n.transform),
+                });
+            }
+            match &n.kind {
+                NodeKind::Tool(t) => push_core(&mut out, t.validate(&format!("tool '{}'", n.name))),
+                NodeKind::Macro(m) => {
+                    if !self.macros.contains_key(&m.name) {
+                        out.push(SceneError::UnknownMacro {
+                            node: n.name.clone(),
+                            name: m.name.clone(),
+                        });
+                    }
+                    if !m.value.is_finite() {
+                        out.push(SceneError::NotFinite {
+                            what: format!("macro tool '{}': value", n.name),
+                            value: m.value.to_string(),
+                        });
+                    }
+                }
+                NodeKind::Volume(v) => {
+                    push_core(&mut out, v.shape.validate(&format!("volume '{}'", n.name)))
+                }
+                NodeKind::Mesh(mesh) => self.mesh_problems(&n.name, mesh, &mut out),
+                NodeKind::Group => {}
+            }
+        }
+        for (name, m) in &self.macros {
+            let tool = ductile_core::tool::Tool::Ffsd(m.tool(1.0));
+            push_core(&mut out, tool.validate(&format!("macro '{name}'")));
+            if !(m.range.0.is_finite() && m.range.1.is_finite() && m.range.0 < m.range.1) {
+                out.push(SceneError::NotFinite {
+                    what: format!("macro '{name}': range (must be finite, min < max)"),
+                    value: format!("{:?}", m.range),
+                });
+            }
+        }
+        out
+    }
+
+    fn mesh_problems(
+        &self,
+        name: &str,
+        mesh: &crate::document::MeshNode,
+        out: &mut Vec<SceneError>,
+    ) {
+        for (area_name, area) in &mesh.areas {
+            if let Area::Region(shapes) = area {
+                for (k, s) in shapes.iter().enumerate() {
+                    push_core(
+                        out,
+                        s.shape
+                            .validate(&format!("mesh '{name}', area '{area_name}', shape {k}")),
+                    );
+                }
+            }
+        }
+        for (i, layer) in mesh.stack.iter().enumerate() {
+            let what = format!("mesh '{name}', layer {i} ('{}')", layer.tool);
+            match self.node(&layer.tool) {
+                Err(_) => out.push(SceneError::UnknownTool {
+                    mesh: name.to_owned(),
+                    layer: i,
+                    tool: layer.tool.clone(),
+                }),
+                Ok(t) if !t.kind.is_tool() => out.push(SceneError::WrongKind {
+                    node: layer.tool.clone(),
+                    found: t.kind.name(),
+                    expected: "tool",
+                }),
+                Ok(_) => {}
+            }
+            if !(layer.weight.is_finite() && (0.0..=1.0).contains(&layer.weight)) {
+                out.push(SceneError::Core(CoreError::OutOfRange {
+                    what: format!("{what}: weight"),
+                    value: f64::from(layer.weight),
+                    expected: "must be in [0, 1]",
+                }));
+            }
+            if let Some(inf) = &layer.influence {
+                for v in &inf.volumes {
+                    match self.node(v) {
+                        Err(_) => out.push(SceneError::UnknownVolume {
+                            mesh: name.to_owned(),
+                            layer: i,
+                            volume: v.clone(),
+                        }),
+                        Ok(n) if !matches!(n.kind, NodeKind::Volume(_)) => {
+                            out.push(SceneError::WrongKind {
+                                node: v.clone(),
+                                found: n.kind.name(),
+                                expected: "volume",
+                            })
+                        }
+                        Ok(_) => {}
+                    }
+                }
+                if let Some(a) = &inf.area
+                    && !mesh.areas.contains_key(a)
+                {
+                    out.push(SceneError::UnknownArea {
+                        mesh: name.to_owned(),
+                        layer: i,
+                        area: a.clone(),
+                    });
+                }
+                if !(inf.inner.is_finite() && (0.0..1.0).contains(&inf.inner)) {
+                    out.push(SceneError::Core(CoreError::OutOfRange {
+                        what: format!("{what}: influence inner"),
+                        value: f64::from(inf.inner),
+                        expected: "must be in [0, 1)",
+                    }));
+                }
+            }
+        }
+    }
+
+    /// `Ok` when [`Document::problems`] finds nothing, else the first problem.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        match self.problems().into_iter().next() {
+            None => Ok(()),
+            Some(e) => Err(e),
+        }
+    }
+}
+
+fn push_core(out: &mut Vec<SceneError>, r: Result<(), CoreError>) {
+    if let Err(e) = r {
+        out.push(SceneError::Core(e));
+    }
+}
