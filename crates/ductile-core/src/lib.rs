@@ -13,6 +13,7 @@ pub mod ffsd;
 pub mod influence;
 pub mod mesh;
 pub mod normals;
+pub mod sketch;
 pub mod stack;
 pub mod tool;
 

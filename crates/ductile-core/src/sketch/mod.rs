@@ -1,0 +1,5 @@
+//! Sketch-based mesh deformation after Kho & Garland, "Sketching Mesh Deformations"
+//! (I3D 2005): strokes drawn in the image plane bend and twist a region of the mesh.
+
+pub mod camera;
+pub mod partition;
