@@ -410,7 +410,7 @@ mod tests {
         use gltf::mesh::Mode;
         assert_eq!(
             triangle_list(Mode::TriangleStrip, &[0, 1, 2, 3]),
-            vec![0, 1, 2, 2, 1, 3]
+            vec![0, 1, 2, 1, 3, 2]
         );
         assert_eq!(
             triangle_list(Mode::TriangleFan, &[0, 1, 2, 3]),
