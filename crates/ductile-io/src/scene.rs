@@ -191,13 +191,11 @@ impl LoadedScene {
     }
 }
 
-/// The directory relative mesh sources are resolved against.
+/// The directory relative paths in the file at `path` are resolved against: its parent
+/// (empty for a bare file name, so that joined paths stay as the user wrote them).
 #[must_use]
 pub fn scene_dir(path: &Path) -> &Path {
-    match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    }
+    path.parent().unwrap_or(Path::new(""))
 }
 
 /// Loads the rest mesh of mesh node `node` (source `source`) of the scene at `scene_path`.
