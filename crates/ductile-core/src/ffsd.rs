@@ -458,14 +458,19 @@ mod tests {
     }
 
     fn deformed(tool: FfsdTool) -> Vec<Vec3> {
-        let stack = Stack { layers: vec![Layer::new("t", Tool::Ffsd(tool))] };
+        let stack = Stack {
+            layers: vec![Layer::new("t", Tool::Ffsd(tool))],
+        };
         stack.evaluate_welded(&triangle()).unwrap()
     }
 
     fn assert_close(got: &[Vec3], expected: &[[f32; 3]]) {
         for (i, (g, e)) in got.iter().zip(expected).enumerate() {
             let e = Vec3::from_array(*e);
-            assert!((*g - e).length() < 1e-6, "vertex {i}: got {g}, expected {e}");
+            assert!(
+                (*g - e).length() < 1e-6,
+                "vertex {i}: got {g}, expected {e}"
+            );
         }
     }
 
@@ -477,7 +482,11 @@ mod tests {
         let got = deformed(FfsdTool::new(vec![ControlPoint::basic(C, 0.5, 2.0, 1.0)]));
         assert_close(
             &got,
-            &[[0.0, 0.0, -0.5], [1.303_265_3, 0.0, -0.303_265_33], [0.0, 2.135_335_3, -0.067_667_64]],
+            &[
+                [0.0, 0.0, -0.5],
+                [1.303_265_3, 0.0, -0.303_265_33],
+                [0.0, 2.135_335_3, -0.067_667_64],
+            ],
         );
     }
 
@@ -488,7 +497,11 @@ mod tests {
         let got = deformed(FfsdTool::new(vec![ControlPoint::basic(C, 0.5, 0.5, 1.0)]));
         assert_close(
             &got,
-            &[[0.0, 0.0, -0.5], [1.454_866_8, 0.0, -0.454_866_76], [0.0, 2.780_614, -0.390_307_04]],
+            &[
+                [0.0, 0.0, -0.5],
+                [1.454_866_8, 0.0, -0.454_866_76],
+                [0.0, 2.780_614, -0.390_307_04],
+            ],
         );
     }
 
@@ -500,7 +513,11 @@ mod tests {
         let got = deformed(FfsdTool::new(vec![p]));
         assert_close(
             &got,
-            &[[0.0, 0.0, 0.5], [1.303_265_3, 0.0, 0.303_265_33], [0.0, 2.135_335_3, 0.067_667_64]],
+            &[
+                [0.0, 0.0, 0.5],
+                [1.303_265_3, 0.0, 0.303_265_33],
+                [0.0, 2.135_335_3, 0.067_667_64],
+            ],
         );
     }
 
@@ -517,7 +534,11 @@ mod tests {
         let got = deformed(FfsdTool::new(vec![p]));
         assert_close(
             &got,
-            &[[-0.303_265_33, 0.0, 0.303_265_33], [1.0, 0.0, 0.5], [-0.041_042_5, 2.082_085, 0.041_042_5]],
+            &[
+                [-0.303_265_33, 0.0, 0.303_265_33],
+                [1.0, 0.0, 0.5],
+                [-0.041_042_5, 2.082_085, 0.041_042_5],
+            ],
         );
     }
 
@@ -547,7 +568,11 @@ mod tests {
         let got = deformed(tool);
         assert_close(
             &got,
-            &[[0.0, 0.0, -0.25], [1.176_776_7, 0.0, -0.176_776_7], [0.0, 2.135_335_3, -0.067_667_64]],
+            &[
+                [0.0, 0.0, -0.25],
+                [1.176_776_7, 0.0, -0.176_776_7],
+                [0.0, 2.135_335_3, -0.067_667_64],
+            ],
         );
     }
 
@@ -556,11 +581,21 @@ mod tests {
         // S_min = 0.5 · 0.5 = 0.25: below it nothing moves, above it the excess remains.
         let below = HeightLimit::Below { theta: 0.5 };
         assert_eq!(below.limit(Vec3::new(0.0, 0.0, 0.2), 0.5), Vec3::ZERO);
-        assert!((below.limit(Vec3::new(0.0, 0.0, 0.4), 0.5) - Vec3::new(0.0, 0.0, 0.15)).length() < 1e-7);
-        let both = HeightLimit::Both { below: 0.2, above: 0.6 };
+        assert!(
+            (below.limit(Vec3::new(0.0, 0.0, 0.4), 0.5) - Vec3::new(0.0, 0.0, 0.15)).length()
+                < 1e-7
+        );
+        let both = HeightLimit::Both {
+            below: 0.2,
+            above: 0.6,
+        };
         assert_eq!(both.limit(Vec3::new(0.1, 0.0, 0.0), 1.0), Vec3::ZERO);
-        assert!((both.limit(Vec3::new(0.5, 0.0, 0.0), 1.0) - Vec3::new(0.3, 0.0, 0.0)).length() < 1e-7);
-        assert!((both.limit(Vec3::new(0.9, 0.0, 0.0), 1.0) - Vec3::new(0.4, 0.0, 0.0)).length() < 1e-7);
+        assert!(
+            (both.limit(Vec3::new(0.5, 0.0, 0.0), 1.0) - Vec3::new(0.3, 0.0, 0.0)).length() < 1e-7
+        );
+        assert!(
+            (both.limit(Vec3::new(0.9, 0.0, 0.0), 1.0) - Vec3::new(0.4, 0.0, 0.0)).length() < 1e-7
+        );
     }
 
     #[test]
@@ -589,16 +624,29 @@ mod tests {
 
     #[test]
     fn invalid_parameters_are_named() {
-        let bad = |p: ControlPoint| FfsdTool::new(vec![p]).validate("tool 'x'").unwrap_err().to_string();
+        let bad = |p: ControlPoint| {
+            FfsdTool::new(vec![p])
+                .validate("tool 'x'")
+                .unwrap_err()
+                .to_string()
+        };
         assert!(bad(ControlPoint::basic(C, 0.5, 0.0, 1.0)).contains("alpha"));
         assert!(bad(ControlPoint::basic(C, 0.5, 1.0, -1.0)).contains("epsilon"));
         assert!(bad(ControlPoint::basic(C, f32::NAN, 1.0, 1.0)).contains("gamma"));
         let mut t = FfsdTool::new(vec![ControlPoint::basic(C, 0.5, 1.0, 1.0)]);
         t.height = Some(HeightLimit::Above { theta: 1.5 });
-        assert!(t.validate("tool 'x'").unwrap_err().to_string().contains("theta"));
+        assert!(
+            t.validate("tool 'x'")
+                .unwrap_err()
+                .to_string()
+                .contains("theta")
+        );
         t.height = Some(HeightLimit::Above { theta: 0.0 });
         assert!(t.validate("tool 'x'").is_err());
-        t.height = Some(HeightLimit::Both { below: 0.6, above: 0.5 });
+        t.height = Some(HeightLimit::Both {
+            below: 0.6,
+            above: 0.5,
+        });
         assert!(t.validate("tool 'x'").is_err());
     }
 
@@ -612,16 +660,26 @@ mod tests {
         );
         let rest = triangle();
         let moved_mesh = Mesh {
-            positions: rest.welded_positions().iter().map(|&p| m.transform_point3(p)).collect(),
+            positions: rest
+                .welded_positions()
+                .iter()
+                .map(|&p| m.transform_point3(p))
+                .collect(),
             normals: None,
             uvs: None,
             indices: vec![0, 1, 2],
         };
         let moved = RestMesh::new(moved_mesh, "moved").unwrap();
-        let a = Stack { layers: vec![Layer::new("t", Tool::Ffsd(tool.clone()))] }.evaluate_welded(&rest).unwrap();
-        let b = Stack { layers: vec![Layer::new("t", Tool::Ffsd(tool.transformed(&m)))] }
-            .evaluate_welded(&moved)
-            .unwrap();
+        let a = Stack {
+            layers: vec![Layer::new("t", Tool::Ffsd(tool.clone()))],
+        }
+        .evaluate_welded(&rest)
+        .unwrap();
+        let b = Stack {
+            layers: vec![Layer::new("t", Tool::Ffsd(tool.transformed(&m)))],
+        }
+        .evaluate_welded(&moved)
+        .unwrap();
         for (p, q) in a.iter().zip(&b) {
             assert!((m.transform_point3(*p) - *q).length() < 1e-4, "{p} → {q}");
         }

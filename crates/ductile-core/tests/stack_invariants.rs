@@ -25,7 +25,16 @@ fn grid(n: usize) -> RestMesh {
             indices.extend([a, b, d, a, d, c2]);
         }
     }
-    RestMesh::new(Mesh { positions, normals: None, uvs: None, indices }, "grid").unwrap()
+    RestMesh::new(
+        Mesh {
+            positions,
+            normals: None,
+            uvs: None,
+            indices,
+        },
+        "grid",
+    )
+    .unwrap()
 }
 
 fn mirror(p: Vec3) -> Vec3 {
@@ -33,17 +42,32 @@ fn mirror(p: Vec3) -> Vec3 {
 }
 
 fn point() -> impl Strategy<Value = ControlPoint> {
-    (-1.0f32..1.0, -1.0f32..1.0, 0.05f32..0.8, -0.8f32..0.8, 0.3f32..2.0, 0.1f32..0.8, 0..3u8).prop_map(
-        |(x, y, z, gamma, alpha, epsilon, mode)| {
+    (
+        -1.0f32..1.0,
+        -1.0f32..1.0,
+        0.05f32..0.8,
+        -0.8f32..0.8,
+        0.3f32..2.0,
+        0.1f32..0.8,
+        0..3u8,
+    )
+        .prop_map(|(x, y, z, gamma, alpha, epsilon, mode)| {
             let position = Vec3::new(x, y, z);
             let mode = match mode {
                 0 => PointMode::Basic,
                 1 => PointMode::Virtual,
-                _ => PointMode::Directional { reference: Vec3::new(x * 0.8, y * 0.8, 0.0) },
+                _ => PointMode::Directional {
+                    reference: Vec3::new(x * 0.8, y * 0.8, 0.0),
+                },
             };
-            ControlPoint { position, mode, gamma, alpha, epsilon }
-        },
-    )
+            ControlPoint {
+                position,
+                mode,
+                gamma,
+                alpha,
+                epsilon,
+            }
+        })
 }
 
 fn evaluate(rest: &RestMesh, layers: Vec<Layer>) -> Vec<Vec3> {
@@ -130,8 +154,19 @@ proptest! {
 fn named_area_limits_evaluation_to_its_vertices() {
     let rest = grid(9);
     let area: Vec<u32> = (0..20).collect();
-    let mut layer = Layer::new("t", Tool::Ffsd(FfsdTool::new(vec![ControlPoint::basic(Vec3::new(0.0, 0.0, 0.5), 0.8, 1.0, 1.0)])));
-    layer.influence = Some(Influence { area: Some(area.clone()), ..Influence::default() });
+    let mut layer = Layer::new(
+        "t",
+        Tool::Ffsd(FfsdTool::new(vec![ControlPoint::basic(
+            Vec3::new(0.0, 0.0, 0.5),
+            0.8,
+            1.0,
+            1.0,
+        )])),
+    );
+    layer.influence = Some(Influence {
+        area: Some(area.clone()),
+        ..Influence::default()
+    });
     let out = evaluate(&rest, vec![layer]);
     for (i, (v, p)) in rest.welded_positions().iter().zip(&out).enumerate() {
         if area.contains(&(i as u32)) {
