@@ -116,6 +116,7 @@ fn problems_lists_every_problem_at_once() {
 }
 
 #[test]
+#[allow(irrefutable_let_patterns)] // Refutable once more tool kinds exist.
 fn resolve_maps_tools_into_mesh_space_and_areas_to_welded_vertices() {
     let d = doc();
     let rest = quad();
