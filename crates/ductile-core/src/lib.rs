@@ -7,6 +7,8 @@
 //! [`Tool`](tool::Tool) and an optional [`Influence`](influence::Influence), maps it to
 //! [`Deformed`](mesh::Deformed) positions and normals.
 
+#![warn(clippy::unwrap_used, clippy::expect_used)]
+
 pub mod axial;
 pub mod basis;
 pub mod curve;
