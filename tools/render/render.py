@@ -73,9 +73,10 @@ def load_glb(path):
 
 VIEWS = {
     # (right, up) axes in mesh space; the camera looks along right x up.
-    "side": (np.array([0, 0, 1.0]), np.array([0, 1.0, 0])),
-    "front": (np.array([1.0, 0, 0]), np.array([0, 1.0, 0])),
-    "top": (np.array([1.0, 0, 0]), np.array([0, 0, -1.0])),
+    "side": (np.array([0, 0, 1.0]), np.array([0, 1.0, 0])),  # viewer on -x
+    "front": (np.array([1.0, 0, 0]), np.array([0, 1.0, 0])),  # viewer on +z
+    "back": (np.array([-1.0, 0, 0]), np.array([0, 1.0, 0])),  # viewer on -z
+    "top": (np.array([1.0, 0, 0]), np.array([0, 0, -1.0])),  # viewer on +y
     "iso": (np.array([0.7071, 0, 0.7071]), np.array([-0.4082, 0.8165, 0.4082])),
 }
 
