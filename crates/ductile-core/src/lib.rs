@@ -11,6 +11,7 @@ pub mod basis;
 pub mod error;
 pub mod ffsd;
 pub mod influence;
+pub mod lattice;
 pub mod mesh;
 pub mod normals;
 pub mod sketch;

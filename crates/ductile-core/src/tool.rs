@@ -16,6 +16,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
 use crate::ffsd::{FfsdBind, FfsdTool};
+use crate::lattice::{LatticeTool, PreparedLattice};
 use crate::mesh::Topology;
 
 /// What a tool sees when it binds: the layer's input.
@@ -60,6 +61,8 @@ pub trait Deformer {
 pub enum Tool {
     /// FFSD control points (Yoshizawa et al. 2002; Martínek & Kolingerová 2014).
     Ffsd(FfsdTool),
+    /// Lattice FFD: Bernstein (Sederberg–Parry), B-spline and rational lattices.
+    Lattice(LatticeTool),
 }
 
 /// The bind of a [`Tool`].
@@ -67,6 +70,8 @@ pub enum Tool {
 pub enum ToolBind {
     /// Bind of [`Tool::Ffsd`].
     Ffsd(FfsdBind),
+    /// Bind of [`Tool::Lattice`].
+    Lattice(Box<PreparedLattice>),
 }
 
 impl Tool {
@@ -75,6 +80,7 @@ impl Tool {
     pub fn kind_name(&self) -> &'static str {
         match self {
             Tool::Ffsd(_) => "FFSD control points",
+            Tool::Lattice(_) => "lattice FFD",
         }
     }
 
@@ -82,6 +88,7 @@ impl Tool {
     pub fn validate(&self, what: &str) -> Result<()> {
         match self {
             Tool::Ffsd(t) => t.validate(what),
+            Tool::Lattice(t) => t.validate(what),
         }
     }
 
@@ -89,6 +96,7 @@ impl Tool {
     pub fn bind(&self, input: &BindInput<'_>) -> Result<ToolBind> {
         Ok(match self {
             Tool::Ffsd(t) => ToolBind::Ffsd(t.bind(input)?),
+            Tool::Lattice(t) => ToolBind::Lattice(Box::new(t.bind(input)?)),
         })
     }
 
@@ -97,6 +105,7 @@ impl Tool {
     pub fn deform(&self, bind: &ToolBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
         match (self, bind) {
             (Tool::Ffsd(t), ToolBind::Ffsd(b)) => t.deform(b, positions, active, out),
+            (Tool::Lattice(t), ToolBind::Lattice(b)) => t.deform(b, positions, active, out),
             #[allow(unreachable_patterns)]
             _ => {
                 for (o, &i) in out.iter_mut().zip(active) {
@@ -111,6 +120,7 @@ impl Tool {
     pub fn transformed(&self, m: &Affine3A) -> Self {
         match self {
             Tool::Ffsd(t) => Tool::Ffsd(t.transformed(m)),
+            Tool::Lattice(t) => Tool::Lattice(t.transformed(m)),
         }
     }
 
@@ -119,6 +129,7 @@ impl Tool {
     pub fn same_rest_state(&self, other: &Self) -> bool {
         match (self, other) {
             (Tool::Ffsd(a), Tool::Ffsd(b)) => a.same_rest_state(b),
+            (Tool::Lattice(a), Tool::Lattice(b)) => a.same_rest_state(b),
             #[allow(unreachable_patterns)]
             _ => false,
         }
