@@ -15,7 +15,9 @@ use std::path::Path;
 mod common;
 
 /// Normal dependencies `ductile-core` may have (numeric crates the lead allows go here).
-const CORE_ALLOWED: &[&str] = &["glam", "serde", "thiserror", "rayon", "faer"];
+/// `pathfinding` (graph algorithms: the sketch tool's min-cut) was merged into core by the
+/// lead.
+const CORE_ALLOWED: &[&str] = &["glam", "serde", "thiserror", "rayon", "faer", "pathfinding"];
 /// Dependencies the pure crates (core, scene) must never have.
 const PURE_FORBIDDEN: &[&str] = &["bevy", "egui", "bevy_egui", "gltf", "ron"];
 /// Engine and UI crates.
