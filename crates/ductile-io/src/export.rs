@@ -241,13 +241,16 @@ fn build(path: &Path, meshes: &[ExportMesh<'_>]) -> Result<(json::Root, Vec<u8>)
             ..Default::default()
         }));
     }
-    let scene = b.root.push(json::Scene {
-        extensions: None,
-        extras: Default::default(),
-        name: None,
-        nodes,
-    });
-    b.root.scene = Some(scene);
+    // glTF wants a scene's node list non-empty: a file without meshes has no scene.
+    if !nodes.is_empty() {
+        let scene = b.root.push(json::Scene {
+            extensions: None,
+            extras: Default::default(),
+            name: None,
+            nodes,
+        });
+        b.root.scene = Some(scene);
+    }
     Ok((b.root, b.bin))
 }
 
@@ -272,14 +275,18 @@ pub fn export_gltf(path: impl AsRef<Path>, meshes: &[ExportMesh<'_>]) -> Result<
         path: path.to_owned(),
         source: std::io::Error::other(e),
     };
+    // A scene without meshes has no data: glTF forbids an empty buffer, so there is none.
+    let has_data = !bin.is_empty();
     let bytes = if binary {
-        root.buffers.push(json::Buffer {
-            byte_length: USize64::from(bin.len()),
-            name: None,
-            uri: None,
-            extensions: None,
-            extras: Default::default(),
-        });
+        if has_data {
+            root.buffers.push(json::Buffer {
+                byte_length: USize64::from(bin.len()),
+                name: None,
+                uri: None,
+                extensions: None,
+                extras: Default::default(),
+            });
+        }
         let json_bytes = json::serialize::to_vec(&root).map_err(json_err)?;
         let glb = gltf::binary::Glb {
             header: gltf::binary::Header {
@@ -289,25 +296,69 @@ pub fn export_gltf(path: impl AsRef<Path>, meshes: &[ExportMesh<'_>]) -> Result<
                 length: 0,
             },
             json: json_bytes.into(),
-            bin: Some(bin.into()),
+            bin: has_data.then(|| bin.into()),
         };
         glb.to_vec().map_err(|e| IoError::Write {
             path: path.to_owned(),
             source: std::io::Error::other(e),
         })?
     } else {
-        let uri = format!(
-            "data:application/octet-stream;base64,{}",
-            base64::engine::general_purpose::STANDARD.encode(&bin)
-        );
-        root.buffers.push(json::Buffer {
-            byte_length: USize64::from(bin.len()),
-            name: None,
-            uri: Some(uri),
-            extensions: None,
-            extras: Default::default(),
-        });
+        if has_data {
+            let uri = format!(
+                "data:application/octet-stream;base64,{}",
+                base64::engine::general_purpose::STANDARD.encode(&bin)
+            );
+            root.buffers.push(json::Buffer {
+                byte_length: USize64::from(bin.len()),
+                name: None,
+                uri: Some(uri),
+                extensions: None,
+                extras: Default::default(),
+            });
+        }
         json::serialize::to_vec_pretty(&root).map_err(json_err)?
     };
     write_atomic(path, &bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_empty_scene_exports_a_valid_file_without_buffer() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in ["e.glb", "e.gltf"] {
+            let p = dir.path().join(name);
+            export_gltf(&p, &[]).unwrap();
+            let g = gltf::Gltf::from_slice(&std::fs::read(&p).unwrap()).unwrap();
+            assert_eq!(g.buffers().count(), 0);
+            assert_eq!(g.meshes().count(), 0);
+        }
+    }
+
+    #[test]
+    fn bounds_and_zero_normals_follow_the_spec() {
+        let mesh = Mesh {
+            positions: vec![
+                Vec3::new(-1.0, 2.0, 0.5),
+                Vec3::X,
+                Vec3::new(0.0, 3.0, -2.0),
+            ],
+            normals: Some(vec![Vec3::ZERO, Vec3::Y * 2.0, Vec3::Z]),
+            uvs: None,
+            indices: vec![0, 1, 2],
+        };
+        let (root, bin) = build(Path::new("x.glb"), &[ExportMesh::from_mesh("m", &mesh)]).unwrap();
+        let pos = &root.accessors[0];
+        assert_eq!(pos.min, Some(json::Value::from(vec![-1.0f32, 0.0, -2.0])));
+        assert_eq!(pos.max, Some(json::Value::from(vec![1.0f32, 3.0, 0.5])));
+        // Normals are the second view: unit length, +Z for a zero normal.
+        let off = 36;
+        let n: Vec<f32> = bin[off..off + 36]
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        assert_eq!(n, vec![0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
+    }
 }
