@@ -174,7 +174,7 @@ fn bench_prints_min_median_max() {
     assert_eq!(r, Ok(0));
     assert!(out.contains("3 iterations, 2 threads"), "{out}");
     assert!(
-        out.contains("mesh 'tetra' (4 vertices, 1 layers): min "),
+        out.contains("mesh 'tetra' (4 vertices, 1 layers): resolve "),
         "{out}"
     );
     assert!(out.contains("median"), "{out}");
