@@ -14,8 +14,11 @@
 use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::axial::{AxialBind, AxialTool};
+use crate::curve::{CurveBind, CurveTool};
 use crate::error::Result;
 use crate::ffsd::{FfsdBind, FfsdTool};
+use crate::lattice::{LatticeTool, PreparedLattice};
 use crate::mesh::Topology;
 
 /// What a tool sees when it binds: the layer's input.
@@ -60,6 +63,12 @@ pub trait Deformer {
 pub enum Tool {
     /// FFSD control points (Yoshizawa et al. 2002; Martínek & Kolingerová 2014).
     Ffsd(FfsdTool),
+    /// Axial deformation AxDf (Lazarus et al. 1994; Bechmann's survey §4.1).
+    Axial(AxialTool),
+    /// Curve deformation by De Casteljau / De Boor (Chang & Rockwood 1994; survey §4.2).
+    Curve(CurveTool),
+    /// Lattice FFD: Bernstein (Sederberg–Parry), B-spline and rational lattices.
+    Lattice(LatticeTool),
 }
 
 /// The bind of a [`Tool`].
@@ -67,6 +76,12 @@ pub enum Tool {
 pub enum ToolBind {
     /// Bind of [`Tool::Ffsd`].
     Ffsd(FfsdBind),
+    /// Bind of [`Tool::Axial`].
+    Axial(AxialBind),
+    /// Bind of [`Tool::Curve`].
+    Curve(CurveBind),
+    /// Bind of [`Tool::Lattice`].
+    Lattice(Box<PreparedLattice>),
 }
 
 impl Tool {
@@ -75,6 +90,9 @@ impl Tool {
     pub fn kind_name(&self) -> &'static str {
         match self {
             Tool::Ffsd(_) => "FFSD control points",
+            Tool::Axial(_) => "axial deformation",
+            Tool::Curve(_) => "curve deformation",
+            Tool::Lattice(_) => "lattice FFD",
         }
     }
 
@@ -82,6 +100,9 @@ impl Tool {
     pub fn validate(&self, what: &str) -> Result<()> {
         match self {
             Tool::Ffsd(t) => t.validate(what),
+            Tool::Axial(t) => t.validate(what),
+            Tool::Curve(t) => t.validate(what),
+            Tool::Lattice(t) => t.validate(what),
         }
     }
 
@@ -89,6 +110,9 @@ impl Tool {
     pub fn bind(&self, input: &BindInput<'_>) -> Result<ToolBind> {
         Ok(match self {
             Tool::Ffsd(t) => ToolBind::Ffsd(t.bind(input)?),
+            Tool::Axial(t) => ToolBind::Axial(t.bind(input)?),
+            Tool::Curve(t) => ToolBind::Curve(t.bind(input)?),
+            Tool::Lattice(t) => ToolBind::Lattice(Box::new(t.bind(input)?)),
         })
     }
 
@@ -97,6 +121,9 @@ impl Tool {
     pub fn deform(&self, bind: &ToolBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
         match (self, bind) {
             (Tool::Ffsd(t), ToolBind::Ffsd(b)) => t.deform(b, positions, active, out),
+            (Tool::Axial(t), ToolBind::Axial(b)) => t.deform(b, positions, active, out),
+            (Tool::Curve(t), ToolBind::Curve(b)) => t.deform(b, positions, active, out),
+            (Tool::Lattice(t), ToolBind::Lattice(b)) => t.deform(b, positions, active, out),
             #[allow(unreachable_patterns)]
             _ => {
                 for (o, &i) in out.iter_mut().zip(active) {
@@ -111,6 +138,9 @@ impl Tool {
     pub fn transformed(&self, m: &Affine3A) -> Self {
         match self {
             Tool::Ffsd(t) => Tool::Ffsd(t.transformed(m)),
+            Tool::Axial(t) => Tool::Axial(t.transformed(m)),
+            Tool::Curve(t) => Tool::Curve(t.transformed(m)),
+            Tool::Lattice(t) => Tool::Lattice(t.transformed(m)),
         }
     }
 
@@ -119,6 +149,9 @@ impl Tool {
     pub fn same_rest_state(&self, other: &Self) -> bool {
         match (self, other) {
             (Tool::Ffsd(a), Tool::Ffsd(b)) => a.same_rest_state(b),
+            (Tool::Axial(a), Tool::Axial(b)) => a.same_rest_state(b),
+            (Tool::Curve(a), Tool::Curve(b)) => a.same_rest_state(b),
+            (Tool::Lattice(a), Tool::Lattice(b)) => a.same_rest_state(b),
             #[allow(unreachable_patterns)]
             _ => false,
         }
