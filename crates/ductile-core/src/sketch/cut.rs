@@ -25,7 +25,7 @@ use crate::error::{CoreError, Result};
 use crate::mesh::Topology;
 use crate::sketch::camera::Camera;
 use crate::sketch::partition::Partition;
-use crate::sketch::roi::{VertexGraph, edge_key};
+use crate::sketch::roi::{VertexGraph, check_positions, edge_key, find};
 
 /// Screen-space half-width of the fuzzy region around a cut line, in pixels (Kho & Garland
 /// §4.2.1: "we typically adopt a 5 pixel distance limit").
@@ -108,17 +108,8 @@ pub fn cut_with_line(
             expected: "must be at least 1 pixel",
         });
     }
+    check_positions("cut line", positions, topology)?;
     let n = topology.vertex_count();
-    if positions.len() != n {
-        return Err(CoreError::Degenerate {
-            what: "cut line".to_owned(),
-            problem: format!(
-                "{} positions given for {} welded vertices",
-                positions.len(),
-                n
-            ),
-        });
-    }
     let (point, normal) = cut_plane(camera, line_px)?;
     let unit = dir / len;
 
@@ -192,13 +183,6 @@ pub fn cut_with_line(
     // Connected fuzzy regions (union-find over fuzzy-fuzzy edges).
     let local: HashMap<u32, usize> = fuzzy.iter().enumerate().map(|(i, &t)| (t, i)).collect();
     let mut parent: Vec<usize> = (0..fuzzy.len()).collect();
-    fn find(parent: &mut [usize], mut x: usize) -> usize {
-        while parent[x] != x {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        x
-    }
     let mut keys: Vec<u64> = edge_tris.keys().copied().collect();
     keys.sort_unstable();
     for key in &keys {
@@ -471,7 +455,8 @@ pub fn cut_plane(camera: &Camera, line_px: [Vec2; 2]) -> Result<(Vec3, Vec3)> {
 ///
 /// # Errors
 /// [`CoreError::StrokeTooShort`] for an empty curve, [`CoreError::NotFinite`] for a bad curve
-/// node, [`CoreError::NoSuchVertex`] when `base` names a vertex that does not exist and
+/// node, [`CoreError::Degenerate`] when `positions` does not match the topology,
+/// [`CoreError::NoSuchVertex`] when `base` names a vertex that does not exist and
 /// [`CoreError::Cut`] when the region to split is empty.
 pub fn combine_cuts(
     positions: &[Vec3],
@@ -480,6 +465,7 @@ pub fn combine_cuts(
     cuts: &[MeshCut],
     curve: &[Vec3],
 ) -> Result<Partition> {
+    check_positions("combining cuts", positions, topology)?;
     let n = topology.vertex_count();
     if curve.is_empty() {
         return Err(CoreError::StrokeTooShort {
