@@ -741,6 +741,33 @@ mod tests {
     }
 
     #[test]
+    fn perspective_cut_is_a_ring_around_the_cylinder() {
+        let (p, t) = cylinder(24, 16, 0.5, 4.0);
+        let (pos, topo) = welded(p, &t);
+        let cam = Camera {
+            eye: Vec3::new(0.0, 2.0, 6.0),
+            target: Vec3::new(0.0, 2.0, 0.0),
+            up: Vec3::Y,
+            projection: Projection::Perspective { fov_y: 0.9 },
+            near: 0.1,
+            far: 100.0,
+            viewport: Vec2::new(400.0, 400.0),
+        };
+        // Right to left this time: the positive side (right of the direction) is above.
+        let a = cam.project(Vec3::new(1.0, 2.6, 0.5)).unwrap().0;
+        let b = cam.project(Vec3::new(-1.0, 2.6, 0.5)).unwrap().0;
+        let cut = cut_with_line(&cam, [a, b], &pos, &topo).unwrap();
+        assert_eq!(cut.boundary.len(), 24);
+        let ring_y = pos[cut.boundary[0] as usize].y;
+        assert!(cut.boundary.iter().all(|&v| pos[v as usize].y == ring_y));
+        assert!((ring_y - 2.6).abs() < 0.3, "{ring_y}");
+        assert!(cut.positive.iter().all(|&v| pos[v as usize].y > ring_y));
+        assert!(cut.negative.iter().all(|&v| pos[v as usize].y < ring_y));
+        // The plane contains the eye.
+        assert!(cut.normal.dot(cam.eye - cut.point).abs() < 1e-3);
+    }
+
+    #[test]
     fn nearest_region_is_cut_when_the_plane_meets_two_parts() {
         // Two cylinders, one behind the other; the line crosses both on screen.
         let (mut p, mut t) = cylinder(24, 16, 0.5, 4.0);

@@ -705,6 +705,18 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn curve_past_both_ends_makes_the_whole_part_the_region() {
+        // Fig. 11: a curve over the whole cylinder bends all of it.
+        let (p, t) = cylinder(24, 16, 0.5, 4.0);
+        let (pos, topo) = welded(p, &t);
+        let curve = [Vec3::new(0.0, -1.0, 0.5), Vec3::new(0.0, 5.0, 0.5)];
+        let region = region_from_curve(&pos, &topo, &curve).unwrap();
+        assert!(region.start.loops.is_empty() && region.end.loops.is_empty());
+        assert_eq!(region.partition.roi.len(), pos.len());
+        assert!(region.partition.rigid.is_empty());
+    }
+
+    #[test]
     fn torus_keeps_both_loops_of_each_plane() {
         // Ring angles of vertex columns are 2π(i + ½)/32; the curve follows the ring from
         // angle 0.3 to 1.2 (radians) on its outer equator.
