@@ -20,6 +20,9 @@ use crate::sketch::camera::Ray;
 /// Most triangles in a leaf.
 pub const MAX_LEAF: usize = 4;
 
+/// Ranges with at least this many triangles are split and their halves built in parallel.
+const PARALLEL_MIN: usize = 32_768;
+
 /// Number of centroid bins for the SAH split search.
 const BINS: usize = 16;
 
@@ -150,43 +153,8 @@ impl Bvh {
                 id: i as u32,
             });
         }
-        let n = prims.len();
-        let mut nodes = Vec::with_capacity(2 * n.div_ceil(MAX_LEAF).max(1));
-        let (root_bounds, root_cbounds) = range_bounds(&prims);
-        nodes.push(Node {
-            min: root_bounds.min,
-            max: root_bounds.max,
-            first: 0,
-            count: n as u32,
-        });
-        // Work list: node index, range of `prims`, and the centroid bounds of that range (the
-        // node's own box is already stored; children's boxes are gathered while splitting).
-        let mut stack = vec![(0usize, 0usize, n, root_cbounds)];
-        while let Some((node, start, end, cbounds)) = stack.pop() {
-            if end - start <= MAX_LEAF {
-                continue;
-            }
-            let Some(split) = sah_split(&mut prims[start..end], &cbounds) else {
-                continue;
-            };
-            let mid = start + split.mid;
-            let left = nodes.len();
-            for (bounds, first, count) in [
-                (split.left, start, split.mid),
-                (split.right, mid, end - mid),
-            ] {
-                nodes.push(Node {
-                    min: bounds.min,
-                    max: bounds.max,
-                    first: first as u32,
-                    count: count as u32,
-                });
-            }
-            nodes[node].first = left as u32;
-            nodes[node].count = 0;
-            stack.push((left, start, mid, split.left_centroids));
-            stack.push((left + 1, mid, end, split.right_centroids));
-        }
+        let (bounds, cbounds) = range_bounds(&prims);
+        let nodes = build_nodes(&mut prims, 0, bounds, cbounds, PARALLEL_MIN);
         Ok(Self {
             nodes,
             corners: prims
@@ -281,6 +249,101 @@ impl Bvh {
 /// SAH cost curve of a large node is smooth, so a sample finds practically the same plane
 /// while the build stays linear per level with a small constant).
 const MAX_BINNED: usize = 4096;
+
+/// Builds the nodes over `prims` (which start at `offset` in the final primitive order),
+/// root first. Ranges of at least `parallel_min` primitives are split once and their two
+/// halves built in parallel (rayon), smaller ones sequentially.
+fn build_nodes(
+    prims: &mut [Prim],
+    offset: usize,
+    bounds: Aabb,
+    cbounds: Aabb,
+    parallel_min: usize,
+) -> Vec<Node> {
+    let n = prims.len();
+    if n >= parallel_min.max(2 * MAX_LEAF)
+        && let Some(split) = sah_split(prims, &cbounds)
+    {
+        let (lp, rp) = prims.split_at_mut(split.mid);
+        let (left, right) = rayon::join(
+            || build_nodes(lp, offset, split.left, split.left_centroids, parallel_min),
+            || {
+                build_nodes(
+                    rp,
+                    offset + split.mid,
+                    split.right,
+                    split.right_centroids,
+                    parallel_min,
+                )
+            },
+        );
+        return join_subtrees(bounds, left, right);
+    }
+    let mut nodes = Vec::with_capacity(2 * n.div_ceil(MAX_LEAF).max(1));
+    nodes.push(Node {
+        min: bounds.min,
+        max: bounds.max,
+        first: offset as u32,
+        count: n as u32,
+    });
+    // Work list: node index, range of `prims`, and the centroid bounds of that range (the
+    // node's own box is already stored; children's boxes are gathered while splitting).
+    let mut stack = vec![(0usize, 0usize, n, cbounds)];
+    while let Some((node, start, end, cbounds)) = stack.pop() {
+        if end - start <= MAX_LEAF {
+            continue;
+        }
+        let Some(split) = sah_split(&mut prims[start..end], &cbounds) else {
+            continue;
+        };
+        let mid = start + split.mid;
+        let left = nodes.len();
+        for (bounds, first, count) in [
+            (split.left, start, split.mid),
+            (split.right, mid, end - mid),
+        ] {
+            nodes.push(Node {
+                min: bounds.min,
+                max: bounds.max,
+                first: (offset + first) as u32,
+                count: count as u32,
+            });
+        }
+        nodes[node].first = left as u32;
+        nodes[node].count = 0;
+        stack.push((left, start, mid, split.left_centroids));
+        stack.push((left + 1, mid, end, split.right_centroids));
+    }
+    nodes
+}
+
+/// A root over two subtrees built separately: `[root, left root, right root, rest of left,
+/// rest of right]`, with the interior nodes' child indices renumbered (children stay
+/// adjacent).
+fn join_subtrees(bounds: Aabb, left: Vec<Node>, right: Vec<Node>) -> Vec<Node> {
+    let l = left.len() as u32;
+    let map_left = |i: u32| if i == 0 { 1 } else { i + 2 };
+    let map_right = |i: u32| if i == 0 { 2 } else { i + l + 1 };
+    let remap = |node: &Node, map: &dyn Fn(u32) -> u32| {
+        let mut out = *node;
+        if out.count == 0 {
+            out.first = map(out.first);
+        }
+        out
+    };
+    let mut out = Vec::with_capacity(1 + left.len() + right.len());
+    out.push(Node {
+        min: bounds.min,
+        max: bounds.max,
+        first: 1,
+        count: 0,
+    });
+    out.push(remap(&left[0], &map_left));
+    out.push(remap(&right[0], &map_right));
+    out.extend(left[1..].iter().map(|n| remap(n, &map_left)));
+    out.extend(right[1..].iter().map(|n| remap(n, &map_right)));
+    out
+}
 
 /// Boxes of a range of primitives: `(bounds of the triangles, bounds of the centroids)`.
 fn range_bounds(prims: &[Prim]) -> (Aabb, Aabb) {
@@ -403,15 +466,27 @@ fn split_at(prims: &[Prim], mid: usize) -> Split {
 }
 
 /// Slab test: the entry distance of the ray into the node's box if it enters before
-/// `t_max`.
+/// `t_max`. Conservative: the interval is widened by `1e-5` of its magnitude so that a hit
+/// exactly on a box face (a ray through a shared vertex) is never lost to rounding, and an
+/// axis the ray is parallel to (`0 · ∞ = NaN`) counts as inside when the origin lies within
+/// the slab.
 fn slab(node: &Node, origin: Vec3, inv: Vec3, t_max: f32) -> Option<f32> {
-    let t0 = (node.min - origin) * inv;
-    let t1 = (node.max - origin) * inv;
-    // `min`/`max` of glam ignore NaN from 0·∞ on the axis the ray is parallel to when the
-    // origin lies on a slab plane, which keeps the test conservative.
-    let near = t0.min(t1).max_element().max(0.0);
-    let far = t0.max(t1).min_element().min(t_max);
-    (near <= far).then_some(near)
+    let mut near = 0.0f32;
+    let mut far = t_max;
+    for a in 0..3 {
+        let t0 = (node.min[a] - origin[a]) * inv[a];
+        let t1 = (node.max[a] - origin[a]) * inv[a];
+        if t0.is_nan() || t1.is_nan() {
+            if origin[a] < node.min[a] || origin[a] > node.max[a] {
+                return None;
+            }
+            continue;
+        }
+        near = near.max(t0.min(t1));
+        far = far.min(t0.max(t1));
+    }
+    let pad = 1e-5 * near.abs().max(far.abs().min(f32::MAX)).max(1.0);
+    (near - pad <= far + pad).then_some(near)
 }
 
 /// Two-sided Möller–Trumbore ray–triangle test: `(t, (w0, w1, w2))` for a hit with
@@ -537,6 +612,54 @@ pub(crate) mod tests {
         };
         assert!(bvh.intersect(&ray).is_none());
         assert!(bvh.intersect_all(&ray).is_empty());
+    }
+
+    #[test]
+    fn parallel_build_finds_the_same_hits() {
+        let (p, t) = cylinder(24, 10, 0.5, 4.0);
+        let mut prims: Vec<Prim> = t
+            .iter()
+            .enumerate()
+            .map(|(i, tri)| {
+                let mut bounds = Aabb::EMPTY;
+                for &v in tri {
+                    bounds.grow_point(p[v as usize]);
+                }
+                Prim {
+                    bounds,
+                    id: i as u32,
+                }
+            })
+            .collect();
+        let (bounds, cbounds) = range_bounds(&prims);
+        // Split in parallel down to ranges of 16 triangles.
+        let nodes = build_nodes(&mut prims, 0, bounds, cbounds, 16);
+        let bvh = Bvh {
+            nodes,
+            corners: prims
+                .iter()
+                .map(|q| t[q.id as usize].map(|v| p[v as usize]))
+                .collect(),
+            ids: prims.iter().map(|q| q.id).collect(),
+        };
+        let mut sorted = bvh.ids.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..t.len() as u32).collect::<Vec<_>>());
+        for k in 0..200 {
+            let a = k as f32 * 0.37;
+            let origin = Vec3::new(3.0 * a.cos(), (k % 11) as f32 * 0.45 - 0.5, 3.0 * a.sin());
+            let target = Vec3::new(0.1 * a.sin(), (k % 7) as f32 * 0.6, 0.0);
+            let ray = Ray {
+                origin,
+                direction: (target - origin).normalize(),
+            };
+            let all: Vec<(f32, u32)> = bvh
+                .intersect_all(&ray)
+                .iter()
+                .map(|h| (h.t, h.triangle))
+                .collect();
+            assert_eq!(all, brute(&ray, &p, &t), "ray {k}");
+        }
     }
 
     proptest! {
