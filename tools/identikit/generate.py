@@ -105,6 +105,7 @@ def build(lm):
     """The areas and the macro library from the landmarks `lm` (left side for pairs)."""
     P = {k: np.asarray(v, np.float64) for k, v in lm.items()}
     mid = lambda *names: np.mean([P[n] for n in names], axis=0)  # noqa: E731
+    on_plane = lambda p: np.array([X0, p[1], p[2]])  # noqa: E731
 
     # ---- Areas (left shapes; right ones are exact mirrors) ----
     a = {}
@@ -147,7 +148,7 @@ def build(lm):
     macro("nose-length", "Nose longer / shorter", "Nose", "nose",
           shift(P["nose-tip"], (0, -0.35, 1), 0.22, 0.24), ("Above", 0.85))
     macro("nose-size", "Nose bigger / smaller", "Nose", "nose",
-          scale(mid("nose-tip", "nose-wing") + [-0.16, 0.1, -0.25], 0.3, 0.3))
+          scale(on_plane(mid("nose-tip", "nose-wing") + [0, 0.1, -0.25]), 0.3, 0.3))
     macro("nose-width", "Nose wider / narrower", "Nose", "nose",
           both(shift(P["nose-wing"] + [0, 0.1, 0], lateral, 0.08, 0.17)), ("Above", 0.9))
     macro("nostril-flare", "Nostrils flared / pinched", "Nose", "nostrils",
@@ -231,7 +232,7 @@ def build(lm):
     macro("chin-width", "Chin wider / narrower", "Chin & Jaw", "chin",
           both(shift(P["chin-side"], lateral, 0.08, 0.22)))
     macro("chin-cleft", "Chin cleft / smooth", "Chin & Jaw", "chin",
-          shift(P["chin"] + [0, 0.02, 0], fwd, -0.04, 0.07))
+          shift(P["chin"] + [0, 0.02, 0], fwd, -0.06, 0.08))
     macro("jaw-width", "Jaw wider / narrower", "Chin & Jaw", "jaw",
           both(shift(P["jaw-angle"], (1, -0.1, 0), 0.14, 0.4)), ("Above", 0.9))
     macro("jaw-angle", "Jaw angle lower / higher", "Chin & Jaw", "jaw",
