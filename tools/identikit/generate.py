@@ -403,11 +403,42 @@ def library():
 BORDER = 0.003
 
 
+def partner(name):
+    """The mirror partner's name: left-X <-> right-X, else the name itself."""
+    for a, b in (("left-", "right-"), ("right-", "left-")):
+        if name.startswith(a):
+            return b + name[len(a):]
+    return name
+
+
+def mirror_invariant(items, others, mirror_item):
+    """True when every item's mirror image is in `others` and vice versa."""
+    key = lambda x: repr(sorted(x.items()))  # noqa: E731
+    return (len(items) == len(others)
+            and sorted(key(mirror_item(x)) for x in items) == sorted(key(y) for y in others))
+
+
+def check_mirror(areas, macros):
+    """Every macro and area is the exact mirror image of its partner (or of itself)."""
+    ok = True
+    for name, m in macros.items():
+        other = macros[partner(name)]
+        if not mirror_invariant(m["points"], other["points"], lambda p: mirrored([p])[0]):
+            print(f"{name}: not the mirror image of {partner(name)}")
+            ok = False
+    for name, shapes in areas.items():
+        if not mirror_invariant(shapes, areas[partner(name)], mirror_shape):
+            print(f"area {name}: not the mirror image of {partner(name)}")
+            ok = False
+    return ok
+
+
 def check(areas, macros, welded, tris):
-    """Numpy self-checks: zero at 0, no step at area borders, no flipped triangles, visible."""
+    """Numpy self-checks: mirror symmetry, no step at area borders, no flipped triangles,
+    a visible change at both ends of the range."""
     from ffsd import evaluate_points, region_members
     n = len(welded)
-    ok = True
+    ok = check_mirror(areas, macros)
     for name in sorted(macros):
         m = macros[name]
         members = region_members(areas[m["area"]], welded)
