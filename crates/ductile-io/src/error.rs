@@ -136,8 +136,8 @@ pub enum IoError {
         vertices: usize,
     },
     /// The imported mesh is not usable (indices out of range, non-finite positions, every
-    /// triangle degenerate, ...).
-    #[error("{}: {source}", path.display())]
+    /// triangle degenerate, ...). Core's message already starts with the file name.
+    #[error("{source}")]
     InvalidMesh {
         /// The file.
         path: PathBuf,
