@@ -8,6 +8,8 @@
 //! [`Deformed`](mesh::Deformed) positions and normals.
 
 pub mod basis;
+pub mod direct_ffd;
+pub mod dogme;
 pub mod error;
 pub mod ffsd;
 pub mod influence;
@@ -16,6 +18,7 @@ pub mod mesh;
 pub mod normals;
 pub mod sketch;
 pub mod stack;
+pub mod surface;
 pub mod tool;
 
 /// The types most users need.

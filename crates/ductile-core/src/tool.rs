@@ -14,10 +14,13 @@
 use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::direct_ffd::{DirectFfdBind, DirectFfdTool};
+use crate::dogme::{DogmeBind, DogmeTool};
 use crate::error::Result;
 use crate::ffsd::{FfsdBind, FfsdTool};
 use crate::lattice::{LatticeTool, PreparedLattice};
 use crate::mesh::Topology;
+use crate::surface::{ShapeSurfaceTool, SurfaceBind};
 
 /// What a tool sees when it binds: the layer's input.
 #[derive(Debug, Clone, Copy)]
@@ -63,6 +66,12 @@ pub enum Tool {
     Ffsd(FfsdTool),
     /// Lattice FFD: Bernstein (Sederberg–Parry), B-spline and rational lattices.
     Lattice(LatticeTool),
+    /// DOGME constraint points with B-spline extrusion functions.
+    Dogme(DogmeTool),
+    /// Direct FFD: point constraints solved on a lattice.
+    DirectFfd(DirectFfdTool),
+    /// Shape surface (Feng et al.): a B-spline surface and a height surface.
+    ShapeSurface(ShapeSurfaceTool),
 }
 
 /// The bind of a [`Tool`].
@@ -72,6 +81,12 @@ pub enum ToolBind {
     Ffsd(FfsdBind),
     /// Bind of [`Tool::Lattice`].
     Lattice(Box<PreparedLattice>),
+    /// Bind of [`Tool::Dogme`].
+    Dogme(DogmeBind),
+    /// Bind of [`Tool::DirectFfd`].
+    DirectFfd(Box<DirectFfdBind>),
+    /// Bind of [`Tool::ShapeSurface`].
+    ShapeSurface(Box<SurfaceBind>),
 }
 
 impl Tool {
@@ -81,6 +96,9 @@ impl Tool {
         match self {
             Tool::Ffsd(_) => "FFSD control points",
             Tool::Lattice(_) => "lattice FFD",
+            Tool::Dogme(_) => "DOGME constraint points",
+            Tool::DirectFfd(_) => "Direct FFD",
+            Tool::ShapeSurface(_) => "shape surface",
         }
     }
 
@@ -89,6 +107,9 @@ impl Tool {
         match self {
             Tool::Ffsd(t) => t.validate(what),
             Tool::Lattice(t) => t.validate(what),
+            Tool::Dogme(t) => t.validate(what),
+            Tool::DirectFfd(t) => t.validate(what),
+            Tool::ShapeSurface(t) => t.validate(what),
         }
     }
 
@@ -97,6 +118,9 @@ impl Tool {
         Ok(match self {
             Tool::Ffsd(t) => ToolBind::Ffsd(t.bind(input)?),
             Tool::Lattice(t) => ToolBind::Lattice(Box::new(t.bind(input)?)),
+            Tool::Dogme(t) => ToolBind::Dogme(t.bind(input)?),
+            Tool::DirectFfd(t) => ToolBind::DirectFfd(Box::new(t.bind(input)?)),
+            Tool::ShapeSurface(t) => ToolBind::ShapeSurface(Box::new(t.bind(input)?)),
         })
     }
 
@@ -106,6 +130,11 @@ impl Tool {
         match (self, bind) {
             (Tool::Ffsd(t), ToolBind::Ffsd(b)) => t.deform(b, positions, active, out),
             (Tool::Lattice(t), ToolBind::Lattice(b)) => t.deform(b, positions, active, out),
+            (Tool::Dogme(t), ToolBind::Dogme(b)) => t.deform(b, positions, active, out),
+            (Tool::DirectFfd(t), ToolBind::DirectFfd(b)) => t.deform(b, positions, active, out),
+            (Tool::ShapeSurface(t), ToolBind::ShapeSurface(b)) => {
+                t.deform(b, positions, active, out)
+            }
             #[allow(unreachable_patterns)]
             _ => {
                 for (o, &i) in out.iter_mut().zip(active) {
@@ -121,6 +150,9 @@ impl Tool {
         match self {
             Tool::Ffsd(t) => Tool::Ffsd(t.transformed(m)),
             Tool::Lattice(t) => Tool::Lattice(t.transformed(m)),
+            Tool::Dogme(t) => Tool::Dogme(t.transformed(m)),
+            Tool::DirectFfd(t) => Tool::DirectFfd(t.transformed(m)),
+            Tool::ShapeSurface(t) => Tool::ShapeSurface(t.transformed(m)),
         }
     }
 
@@ -130,6 +162,9 @@ impl Tool {
         match (self, other) {
             (Tool::Ffsd(a), Tool::Ffsd(b)) => a.same_rest_state(b),
             (Tool::Lattice(a), Tool::Lattice(b)) => a.same_rest_state(b),
+            (Tool::Dogme(a), Tool::Dogme(b)) => a.same_rest_state(b),
+            (Tool::DirectFfd(a), Tool::DirectFfd(b)) => a.same_rest_state(b),
+            (Tool::ShapeSurface(a), Tool::ShapeSurface(b)) => a.same_rest_state(b),
             #[allow(unreachable_patterns)]
             _ => false,
         }
