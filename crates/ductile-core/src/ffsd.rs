@@ -435,3 +435,253 @@ impl FfsdMacro {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! Oracle tests: every expected value below was worked out by hand from the paper's
+    //! formulas (Eq. 1–6) on the triangle `V0 = (0,0,0)`, `V1 = (1,0,0)`, `V2 = (0,2,0)`,
+    //! with `e^{−1/2} = 0.60653066`, `e^{−2} = 0.13533528`, `e^{−5/2} = 0.08208500`.
+
+    use super::*;
+    use crate::mesh::{Mesh, RestMesh};
+    use crate::stack::{Layer, Stack};
+    use crate::tool::Tool;
+
+    fn triangle() -> RestMesh {
+        let mesh = Mesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::new(0.0, 2.0, 0.0)],
+            normals: None,
+            uvs: None,
+            indices: vec![0, 1, 2],
+        };
+        RestMesh::new(mesh, "triangle").unwrap()
+    }
+
+    fn deformed(tool: FfsdTool) -> Vec<Vec3> {
+        let stack = Stack {
+            layers: vec![Layer::new("t", Tool::Ffsd(tool))],
+        };
+        stack.evaluate_welded(&triangle()).unwrap()
+    }
+
+    fn assert_close(got: &[Vec3], expected: &[[f32; 3]]) {
+        for (i, (g, e)) in got.iter().zip(expected).enumerate() {
+            let e = Vec3::from_array(*e);
+            assert!(
+                (*g - e).length() < 1e-6,
+                "vertex {i}: got {g}, expected {e}"
+            );
+        }
+    }
+
+    const C: Vec3 = Vec3::new(0.0, 0.0, 1.0);
+
+    #[test]
+    fn eq1_basic_deformation() {
+        // V_min = V0, σ = W(C, V0); d = γ W/σ (V − C) with γ = 0.5, α = 2, ε = 1.
+        let got = deformed(FfsdTool::new(vec![ControlPoint::basic(C, 0.5, 2.0, 1.0)]));
+        assert_close(
+            &got,
+            &[
+                [0.0, 0.0, -0.5],
+                [1.303_265_3, 0.0, -0.303_265_33],
+                [0.0, 2.135_335_3, -0.067_667_64],
+            ],
+        );
+    }
+
+    #[test]
+    fn eq1_with_fractional_alpha() {
+        // α = 0.5: W/σ at V1 = exp(−(2^{1/4} − 1)/2) = 0.90973352, at V2 = exp(−(5^{1/4} − 1)/2)
+        // = 0.78061408.
+        let got = deformed(FfsdTool::new(vec![ControlPoint::basic(C, 0.5, 0.5, 1.0)]));
+        assert_close(
+            &got,
+            &[
+                [0.0, 0.0, -0.5],
+                [1.454_866_8, 0.0, -0.454_866_76],
+                [0.0, 2.780_614, -0.390_307_04],
+            ],
+        );
+    }
+
+    #[test]
+    fn eq2_virtual_control_point() {
+        // V_cp = 2·V_min − C = (0, 0, −1): the surface is pulled towards C instead.
+        let mut p = ControlPoint::basic(C, 0.5, 2.0, 1.0);
+        p.mode = PointMode::Virtual;
+        let got = deformed(FfsdTool::new(vec![p]));
+        assert_close(
+            &got,
+            &[
+                [0.0, 0.0, 0.5],
+                [1.303_265_3, 0.0, 0.303_265_33],
+                [0.0, 2.135_335_3, 0.067_667_64],
+            ],
+        );
+    }
+
+    #[test]
+    fn eq4_directional_deformation() {
+        // R = V1, C = (1, 0, 1): V_cp = 2R − C = (1, 0, −1), weights W(R, V), σ = W(R, V1).
+        let p = ControlPoint {
+            position: Vec3::new(1.0, 0.0, 1.0),
+            mode: PointMode::Directional { reference: Vec3::X },
+            gamma: 0.5,
+            alpha: 2.0,
+            epsilon: 1.0,
+        };
+        let got = deformed(FfsdTool::new(vec![p]));
+        assert_close(
+            &got,
+            &[
+                [-0.303_265_33, 0.0, 0.303_265_33],
+                [1.0, 0.0, 0.5],
+                [-0.041_042_5, 2.082_085, 0.041_042_5],
+            ],
+        );
+    }
+
+    #[test]
+    fn eq3_several_points_add_up() {
+        // Second point C2 = (0, 2, 1), γ = −0.5, V_min = V2.
+        let got = deformed(FfsdTool::new(vec![
+            ControlPoint::basic(C, 0.5, 2.0, 1.0),
+            ControlPoint::basic(Vec3::new(0.0, 2.0, 1.0), -0.5, 2.0, 1.0),
+        ]));
+        assert_close(
+            &got,
+            &[
+                [0.0, 0.135_335_28, -0.432_332_36],
+                [1.262_222_8, 0.082_085, -0.262_222_83],
+                [0.0, 2.135_335_3, 0.432_332_36],
+            ],
+        );
+    }
+
+    #[test]
+    fn eq5_eq6_height_from_above() {
+        // S_ref = |d(V0)| = 0.5, ϑ = 0.5 → S_max = 0.25. V0 (|d| = 0.5) and V1 (|d| = 0.4289)
+        // are scaled to length 0.25; V2 (|d| = 0.1513) is below S_max and unchanged.
+        let mut tool = FfsdTool::new(vec![ControlPoint::basic(C, 0.5, 2.0, 1.0)]);
+        tool.height = Some(HeightLimit::Above { theta: 0.5 });
+        let got = deformed(tool);
+        assert_close(
+            &got,
+            &[
+                [0.0, 0.0, -0.25],
+                [1.176_776_7, 0.0, -0.176_776_7],
+                [0.0, 2.135_335_3, -0.067_667_64],
+            ],
+        );
+    }
+
+    #[test]
+    fn height_from_below_and_both_sides() {
+        // S_min = 0.5 · 0.5 = 0.25: below it nothing moves, above it the excess remains.
+        let below = HeightLimit::Below { theta: 0.5 };
+        assert_eq!(below.limit(Vec3::new(0.0, 0.0, 0.2), 0.5), Vec3::ZERO);
+        assert!(
+            (below.limit(Vec3::new(0.0, 0.0, 0.4), 0.5) - Vec3::new(0.0, 0.0, 0.15)).length()
+                < 1e-7
+        );
+        let both = HeightLimit::Both {
+            below: 0.2,
+            above: 0.6,
+        };
+        assert_eq!(both.limit(Vec3::new(0.1, 0.0, 0.0), 1.0), Vec3::ZERO);
+        assert!(
+            (both.limit(Vec3::new(0.5, 0.0, 0.0), 1.0) - Vec3::new(0.3, 0.0, 0.0)).length() < 1e-7
+        );
+        assert!(
+            (both.limit(Vec3::new(0.9, 0.0, 0.0), 1.0) - Vec3::new(0.4, 0.0, 0.0)).length() < 1e-7
+        );
+    }
+
+    #[test]
+    fn gain_scales_gamma_like_a_macro_slider() {
+        let m = FfsdMacro {
+            label: "m".into(),
+            group: String::new(),
+            area: None,
+            points: vec![ControlPoint::basic(C, 1.0, 2.0, 1.0)],
+            height: None,
+            range: (-1.0, 1.0),
+        };
+        let got = deformed(m.tool(0.5));
+        assert!((got[0] - Vec3::new(0.0, 0.0, -0.5)).length() < 1e-6);
+        assert_eq!(deformed(m.tool(0.0)), triangle().welded_positions());
+    }
+
+    #[test]
+    fn tiny_epsilon_does_not_divide_by_an_underflowed_sigma() {
+        // W(C, V_min) = exp(−1/(2·1e-4)) underflows f32; the ratio form stays finite.
+        let got = deformed(FfsdTool::new(vec![ControlPoint::basic(C, 0.5, 2.0, 0.01)]));
+        assert!(got.iter().all(|p| p.is_finite()));
+        assert!((got[0] - Vec3::new(0.0, 0.0, -0.5)).length() < 1e-6);
+        assert_eq!(got[1], Vec3::X);
+    }
+
+    #[test]
+    fn invalid_parameters_are_named() {
+        let bad = |p: ControlPoint| {
+            FfsdTool::new(vec![p])
+                .validate("tool 'x'")
+                .unwrap_err()
+                .to_string()
+        };
+        assert!(bad(ControlPoint::basic(C, 0.5, 0.0, 1.0)).contains("alpha"));
+        assert!(bad(ControlPoint::basic(C, 0.5, 1.0, -1.0)).contains("epsilon"));
+        assert!(bad(ControlPoint::basic(C, f32::NAN, 1.0, 1.0)).contains("gamma"));
+        let mut t = FfsdTool::new(vec![ControlPoint::basic(C, 0.5, 1.0, 1.0)]);
+        t.height = Some(HeightLimit::Above { theta: 1.5 });
+        assert!(
+            t.validate("tool 'x'")
+                .unwrap_err()
+                .to_string()
+                .contains("theta")
+        );
+        t.height = Some(HeightLimit::Above { theta: 0.0 });
+        assert!(t.validate("tool 'x'").is_err());
+        t.height = Some(HeightLimit::Both {
+            below: 0.6,
+            above: 0.5,
+        });
+        assert!(t.validate("tool 'x'").is_err());
+    }
+
+    #[test]
+    fn transformed_keeps_the_shape_under_similarity() {
+        let tool = FfsdTool::new(vec![ControlPoint::basic(C, 0.5, 0.7, 0.8)]);
+        let m = Affine3A::from_scale_rotation_translation(
+            Vec3::splat(2.5),
+            glam::Quat::from_rotation_z(0.3),
+            Vec3::new(1.0, 2.0, 3.0),
+        );
+        let rest = triangle();
+        let moved_mesh = Mesh {
+            positions: rest
+                .welded_positions()
+                .iter()
+                .map(|&p| m.transform_point3(p))
+                .collect(),
+            normals: None,
+            uvs: None,
+            indices: vec![0, 1, 2],
+        };
+        let moved = RestMesh::new(moved_mesh, "moved").unwrap();
+        let a = Stack {
+            layers: vec![Layer::new("t", Tool::Ffsd(tool.clone()))],
+        }
+        .evaluate_welded(&rest)
+        .unwrap();
+        let b = Stack {
+            layers: vec![Layer::new("t", Tool::Ffsd(tool.transformed(&m)))],
+        }
+        .evaluate_welded(&moved)
+        .unwrap();
+        for (p, q) in a.iter().zip(&b) {
+            assert!((m.transform_point3(*p) - *q).length() < 1e-4, "{p} → {q}");
+        }
+    }
+}

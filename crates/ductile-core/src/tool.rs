@@ -14,6 +14,8 @@
 use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::axial::{AxialBind, AxialTool};
+use crate::curve::{CurveBind, CurveTool};
 use crate::direct_ffd::{DirectFfdBind, DirectFfdTool};
 use crate::dogme::{DogmeBind, DogmeTool};
 use crate::error::Result;
@@ -64,6 +66,10 @@ pub trait Deformer {
 pub enum Tool {
     /// FFSD control points (Yoshizawa et al. 2002; Martínek & Kolingerová 2014).
     Ffsd(FfsdTool),
+    /// Axial deformation AxDf (Lazarus et al. 1994; Bechmann's survey §4.1).
+    Axial(AxialTool),
+    /// Curve deformation by De Casteljau / De Boor (Chang & Rockwood 1994; survey §4.2).
+    Curve(CurveTool),
     /// Lattice FFD: Bernstein (Sederberg–Parry), B-spline and rational lattices.
     Lattice(LatticeTool),
     /// DOGME constraint points with B-spline extrusion functions.
@@ -79,6 +85,10 @@ pub enum Tool {
 pub enum ToolBind {
     /// Bind of [`Tool::Ffsd`].
     Ffsd(FfsdBind),
+    /// Bind of [`Tool::Axial`].
+    Axial(AxialBind),
+    /// Bind of [`Tool::Curve`].
+    Curve(CurveBind),
     /// Bind of [`Tool::Lattice`].
     Lattice(Box<PreparedLattice>),
     /// Bind of [`Tool::Dogme`].
@@ -95,6 +105,8 @@ impl Tool {
     pub fn kind_name(&self) -> &'static str {
         match self {
             Tool::Ffsd(_) => "FFSD control points",
+            Tool::Axial(_) => "axial deformation",
+            Tool::Curve(_) => "curve deformation",
             Tool::Lattice(_) => "lattice FFD",
             Tool::Dogme(_) => "DOGME constraint points",
             Tool::DirectFfd(_) => "Direct FFD",
@@ -106,6 +118,8 @@ impl Tool {
     pub fn validate(&self, what: &str) -> Result<()> {
         match self {
             Tool::Ffsd(t) => t.validate(what),
+            Tool::Axial(t) => t.validate(what),
+            Tool::Curve(t) => t.validate(what),
             Tool::Lattice(t) => t.validate(what),
             Tool::Dogme(t) => t.validate(what),
             Tool::DirectFfd(t) => t.validate(what),
@@ -117,6 +131,8 @@ impl Tool {
     pub fn bind(&self, input: &BindInput<'_>) -> Result<ToolBind> {
         Ok(match self {
             Tool::Ffsd(t) => ToolBind::Ffsd(t.bind(input)?),
+            Tool::Axial(t) => ToolBind::Axial(t.bind(input)?),
+            Tool::Curve(t) => ToolBind::Curve(t.bind(input)?),
             Tool::Lattice(t) => ToolBind::Lattice(Box::new(t.bind(input)?)),
             Tool::Dogme(t) => ToolBind::Dogme(t.bind(input)?),
             Tool::DirectFfd(t) => ToolBind::DirectFfd(Box::new(t.bind(input)?)),
@@ -129,6 +145,8 @@ impl Tool {
     pub fn deform(&self, bind: &ToolBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
         match (self, bind) {
             (Tool::Ffsd(t), ToolBind::Ffsd(b)) => t.deform(b, positions, active, out),
+            (Tool::Axial(t), ToolBind::Axial(b)) => t.deform(b, positions, active, out),
+            (Tool::Curve(t), ToolBind::Curve(b)) => t.deform(b, positions, active, out),
             (Tool::Lattice(t), ToolBind::Lattice(b)) => t.deform(b, positions, active, out),
             (Tool::Dogme(t), ToolBind::Dogme(b)) => t.deform(b, positions, active, out),
             (Tool::DirectFfd(t), ToolBind::DirectFfd(b)) => t.deform(b, positions, active, out),
@@ -149,6 +167,8 @@ impl Tool {
     pub fn transformed(&self, m: &Affine3A) -> Self {
         match self {
             Tool::Ffsd(t) => Tool::Ffsd(t.transformed(m)),
+            Tool::Axial(t) => Tool::Axial(t.transformed(m)),
+            Tool::Curve(t) => Tool::Curve(t.transformed(m)),
             Tool::Lattice(t) => Tool::Lattice(t.transformed(m)),
             Tool::Dogme(t) => Tool::Dogme(t.transformed(m)),
             Tool::DirectFfd(t) => Tool::DirectFfd(t.transformed(m)),
@@ -161,6 +181,8 @@ impl Tool {
     pub fn same_rest_state(&self, other: &Self) -> bool {
         match (self, other) {
             (Tool::Ffsd(a), Tool::Ffsd(b)) => a.same_rest_state(b),
+            (Tool::Axial(a), Tool::Axial(b)) => a.same_rest_state(b),
+            (Tool::Curve(a), Tool::Curve(b)) => a.same_rest_state(b),
             (Tool::Lattice(a), Tool::Lattice(b)) => a.same_rest_state(b),
             (Tool::Dogme(a), Tool::Dogme(b)) => a.same_rest_state(b),
             (Tool::DirectFfd(a), Tool::DirectFfd(b)) => a.same_rest_state(b),

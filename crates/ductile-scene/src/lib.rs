@@ -6,6 +6,8 @@
 //! it, the CLI and the Studio read it, and [`Document::evaluate`](document::Document)
 //! turns it into deformed meshes through `ductile-core`.
 
+#![warn(clippy::unwrap_used, clippy::expect_used)]
+
 pub mod document;
 pub mod error;
 pub mod resolve;
