@@ -12,6 +12,8 @@
 pub mod axial;
 pub mod basis;
 pub mod curve;
+pub mod direct_ffd;
+pub mod dogme;
 pub mod error;
 pub mod ffsd;
 pub mod frames;
@@ -21,6 +23,7 @@ pub mod mesh;
 pub mod normals;
 pub mod sketch;
 pub mod stack;
+pub mod surface;
 pub mod tool;
 
 /// The types most users need.

@@ -16,10 +16,13 @@ use serde::{Deserialize, Serialize};
 
 use crate::axial::{AxialBind, AxialTool};
 use crate::curve::{CurveBind, CurveTool};
+use crate::direct_ffd::{DirectFfdBind, DirectFfdTool};
+use crate::dogme::{DogmeBind, DogmeTool};
 use crate::error::Result;
 use crate::ffsd::{FfsdBind, FfsdTool};
 use crate::lattice::{LatticeTool, PreparedLattice};
 use crate::mesh::Topology;
+use crate::surface::{ShapeSurfaceTool, SurfaceBind};
 
 /// What a tool sees when it binds: the layer's input.
 #[derive(Debug, Clone, Copy)]
@@ -69,6 +72,12 @@ pub enum Tool {
     Curve(CurveTool),
     /// Lattice FFD: Bernstein (Sederberg–Parry), B-spline and rational lattices.
     Lattice(LatticeTool),
+    /// DOGME constraint points with B-spline extrusion functions.
+    Dogme(DogmeTool),
+    /// Direct FFD: point constraints solved on a lattice.
+    DirectFfd(DirectFfdTool),
+    /// Shape surface (Feng et al.): a B-spline surface and a height surface.
+    ShapeSurface(ShapeSurfaceTool),
 }
 
 /// The bind of a [`Tool`].
@@ -82,6 +91,12 @@ pub enum ToolBind {
     Curve(CurveBind),
     /// Bind of [`Tool::Lattice`].
     Lattice(Box<PreparedLattice>),
+    /// Bind of [`Tool::Dogme`].
+    Dogme(DogmeBind),
+    /// Bind of [`Tool::DirectFfd`].
+    DirectFfd(Box<DirectFfdBind>),
+    /// Bind of [`Tool::ShapeSurface`].
+    ShapeSurface(Box<SurfaceBind>),
 }
 
 impl Tool {
@@ -93,6 +108,9 @@ impl Tool {
             Tool::Axial(_) => "axial deformation",
             Tool::Curve(_) => "curve deformation",
             Tool::Lattice(_) => "lattice FFD",
+            Tool::Dogme(_) => "DOGME constraint points",
+            Tool::DirectFfd(_) => "Direct FFD",
+            Tool::ShapeSurface(_) => "shape surface",
         }
     }
 
@@ -114,6 +132,9 @@ impl Tool {
             Tool::Axial(t) => t.validate(what),
             Tool::Curve(t) => t.validate(what),
             Tool::Lattice(t) => t.validate(what),
+            Tool::Dogme(t) => t.validate(what),
+            Tool::DirectFfd(t) => t.validate(what),
+            Tool::ShapeSurface(t) => t.validate(what),
         }
     }
 
@@ -124,6 +145,9 @@ impl Tool {
             Tool::Axial(t) => ToolBind::Axial(t.bind(input)?),
             Tool::Curve(t) => ToolBind::Curve(t.bind(input)?),
             Tool::Lattice(t) => ToolBind::Lattice(Box::new(t.bind(input)?)),
+            Tool::Dogme(t) => ToolBind::Dogme(t.bind(input)?),
+            Tool::DirectFfd(t) => ToolBind::DirectFfd(Box::new(t.bind(input)?)),
+            Tool::ShapeSurface(t) => ToolBind::ShapeSurface(Box::new(t.bind(input)?)),
         })
     }
 
@@ -135,6 +159,11 @@ impl Tool {
             (Tool::Axial(t), ToolBind::Axial(b)) => t.deform(b, positions, active, out),
             (Tool::Curve(t), ToolBind::Curve(b)) => t.deform(b, positions, active, out),
             (Tool::Lattice(t), ToolBind::Lattice(b)) => t.deform(b, positions, active, out),
+            (Tool::Dogme(t), ToolBind::Dogme(b)) => t.deform(b, positions, active, out),
+            (Tool::DirectFfd(t), ToolBind::DirectFfd(b)) => t.deform(b, positions, active, out),
+            (Tool::ShapeSurface(t), ToolBind::ShapeSurface(b)) => {
+                t.deform(b, positions, active, out)
+            }
             #[allow(unreachable_patterns)]
             _ => {
                 for (o, &i) in out.iter_mut().zip(active) {
@@ -152,6 +181,9 @@ impl Tool {
             Tool::Axial(t) => Tool::Axial(t.transformed(m)),
             Tool::Curve(t) => Tool::Curve(t.transformed(m)),
             Tool::Lattice(t) => Tool::Lattice(t.transformed(m)),
+            Tool::Dogme(t) => Tool::Dogme(t.transformed(m)),
+            Tool::DirectFfd(t) => Tool::DirectFfd(t.transformed(m)),
+            Tool::ShapeSurface(t) => Tool::ShapeSurface(t.transformed(m)),
         }
     }
 
@@ -163,6 +195,9 @@ impl Tool {
             (Tool::Axial(a), Tool::Axial(b)) => a.same_rest_state(b),
             (Tool::Curve(a), Tool::Curve(b)) => a.same_rest_state(b),
             (Tool::Lattice(a), Tool::Lattice(b)) => a.same_rest_state(b),
+            (Tool::Dogme(a), Tool::Dogme(b)) => a.same_rest_state(b),
+            (Tool::DirectFfd(a), Tool::DirectFfd(b)) => a.same_rest_state(b),
+            (Tool::ShapeSurface(a), Tool::ShapeSurface(b)) => a.same_rest_state(b),
             #[allow(unreachable_patterns)]
             _ => false,
         }

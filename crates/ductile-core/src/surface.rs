@@ -1,0 +1,633 @@
+//! Shape surface (the survey's 2-D tool, Bechmann §3, after Feng, Ma & Peng):
+//!
+//! a B-spline tensor surface `S(u, v)`, at rest a planar grid, and a height surface `H` on
+//! the same grid (at rest `H_z ≡ 1`). Binding projects every point `U` onto the rest
+//! surface along its normal: `U = S(u₁, u₂) + u₃ N(u₁, u₂)`; the coordinates
+//! `(u₁, u₂, u₃)` are kept, and the deformed point is (survey §3, last equation)
+//!
+//! `D(U) = S'(u₁, u₂) + H_z(u₁, u₂) · u₃ · N'(u₁, u₂)`
+//!
+//! with `S'` the moved surface and `N'` its unit normal. It is evaluated in the equivalent
+//! displacement form `D(U) = U + (S' − S)(u₁, u₂) + u₃ (H_z N' − N)(u₁, u₂)`, which is the
+//! identity bit for bit while nothing moves. Points that do not project onto the surface
+//! along its normal (their closest point is on the border with a tangential residual) stay
+//! where they are: the deformed area is "the space projecting on the shape surface".
+//! `docs/algorithms/shape-surface.md` gives the details.
+
+use glam::{Affine3A, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::basis::{KnotVector, MAX_DEGREE};
+use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
+use crate::tool::{BindInput, Deformer};
+
+/// The rest plane of a shape surface: `origin + a·u_edge + b·v_edge`, `(a, b) ∈ [0, 1]²`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceFrame {
+    /// The corner `S(0, 0)` at rest.
+    pub origin: Vec3,
+    /// The edge to `S(1, 0)`.
+    pub u_edge: Vec3,
+    /// The edge to `S(0, 1)`.
+    pub v_edge: Vec3,
+}
+
+/// An offset of one control point `P_ij` of the shape surface.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceEdit {
+    /// Control point index `(i, j)` along `u` and `v`.
+    pub at: (u32, u32),
+    /// Offset from the point's planar rest position (tool space).
+    pub offset: Vec3,
+}
+
+/// A value of one control point of the height surface (`z` of `H`, 1 at rest).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeightEdit {
+    /// Control point index `(i, j)`.
+    pub at: (u32, u32),
+    /// The height `h_ij` (1: unchanged thickness).
+    pub height: f32,
+}
+
+/// A shape surface tool.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShapeSurfaceTool {
+    /// The planar rest grid.
+    pub frame: SurfaceFrame,
+    /// Control points along `u` and `v` (each > degree).
+    pub counts: (u32, u32),
+    /// B-spline degree along `u` and `v` (1 to 15; default cubic).
+    #[serde(default = "cubic")]
+    pub degree: (u32, u32),
+    /// Optional offsets that make the *rest* surface non-planar (default: planar, as in the
+    /// paper). Points are projected onto this rest surface.
+    #[serde(default)]
+    pub rest: Vec<SurfaceEdit>,
+    /// Control point moves of the deformed surface `S'` (relative to the rest surface).
+    #[serde(default)]
+    pub moves: Vec<SurfaceEdit>,
+    /// Height surface control values (all others 1).
+    #[serde(default)]
+    pub heights: Vec<HeightEdit>,
+}
+
+fn cubic() -> (u32, u32) {
+    (3, 3)
+}
+
+impl ShapeSurfaceTool {
+    /// A planar, unmoved cubic surface over `frame` with `counts` control points.
+    #[must_use]
+    pub fn planar(frame: SurfaceFrame, counts: (u32, u32)) -> Self {
+        Self {
+            frame,
+            counts,
+            degree: cubic(),
+            rest: Vec::new(),
+            moves: Vec::new(),
+            heights: Vec::new(),
+        }
+    }
+
+    fn knots(&self) -> Option<[KnotVector; 2]> {
+        let (pu, pv) = (self.degree.0 as usize, self.degree.1 as usize);
+        if pu > MAX_DEGREE || pv > MAX_DEGREE {
+            return None;
+        }
+        Some([
+            KnotVector::clamped_uniform(pu, self.counts.0 as usize)?,
+            KnotVector::clamped_uniform(pv, self.counts.1 as usize)?,
+        ])
+    }
+
+    /// The rest and moved control nets and the heights, dense (index `i + n_u j`).
+    fn nets(&self, kv: &[KnotVector; 2]) -> (Vec<Vec3>, Vec<Vec3>, Vec<f32>) {
+        let (nu, nv) = (self.counts.0 as usize, self.counts.1 as usize);
+        let greville = |k: &KnotVector, i: usize| {
+            let p = k.degree();
+            k.knots()[i + 1..=i + p].iter().sum::<f32>() / p as f32
+        };
+        let mut rest = Vec::with_capacity(nu * nv);
+        for j in 0..nv {
+            for i in 0..nu {
+                rest.push(
+                    self.frame.origin
+                        + self.frame.u_edge * greville(&kv[0], i)
+                        + self.frame.v_edge * greville(&kv[1], j),
+                );
+            }
+        }
+        for e in &self.rest {
+            rest[e.at.0 as usize + nu * e.at.1 as usize] += e.offset;
+        }
+        let mut moved = rest.clone();
+        for e in &self.moves {
+            moved[e.at.0 as usize + nu * e.at.1 as usize] += e.offset;
+        }
+        let mut heights = vec![1.0; nu * nv];
+        for e in &self.heights {
+            heights[e.at.0 as usize + nu * e.at.1 as usize] = e.height;
+        }
+        (rest, moved, heights)
+    }
+}
+
+/// Basis values and first derivatives of both parameters at one `(u, v)`.
+#[derive(Debug, Clone, Copy)]
+struct Bases {
+    nu: [f32; MAX_DEGREE + 1],
+    du: [f32; MAX_DEGREE + 1],
+    nv: [f32; MAX_DEGREE + 1],
+    dv: [f32; MAX_DEGREE + 1],
+    su: usize,
+    sv: usize,
+}
+
+fn bases(kv: &[KnotVector; 2], u: f32, v: f32) -> Bases {
+    let mut b = Bases {
+        nu: [0.0; MAX_DEGREE + 1],
+        du: [0.0; MAX_DEGREE + 1],
+        nv: [0.0; MAX_DEGREE + 1],
+        dv: [0.0; MAX_DEGREE + 1],
+        su: 0,
+        sv: 0,
+    };
+    b.su = kv[0].basis_with_derivative(u, &mut b.nu, &mut b.du) - kv[0].degree();
+    b.sv = kv[1].basis_with_derivative(v, &mut b.nv, &mut b.dv) - kv[1].degree();
+    b
+}
+
+/// `(S, S_u, S_v)` of a control net at bases `b`.
+fn eval_net(net: &[Vec3], n_u: usize, pu: usize, pv: usize, b: &Bases) -> [Vec3; 3] {
+    let mut r = [Vec3::ZERO; 3];
+    for j in 0..=pv {
+        for i in 0..=pu {
+            let p = net[b.su + i + n_u * (b.sv + j)];
+            r[0] += p * (b.nu[i] * b.nv[j]);
+            r[1] += p * (b.du[i] * b.nv[j]);
+            r[2] += p * (b.nu[i] * b.dv[j]);
+        }
+    }
+    r
+}
+
+/// One bound point: its surface coordinates and what deform needs at them.
+#[derive(Debug, Clone, Copy)]
+struct Bound {
+    uv: (f32, f32),
+    u3: f32,
+    /// Rest unit normal `N(u₁, u₂)`.
+    normal: Vec3,
+}
+
+/// Bind of a [`ShapeSurfaceTool`]: `(u₁, u₂, u₃)` per active vertex.
+#[derive(Debug, Clone)]
+pub struct SurfaceBind {
+    knots: [KnotVector; 2],
+    /// Slot of each welded vertex in `points` (`u32::MAX`: not bound or not projecting).
+    slot: Vec<u32>,
+    points: Vec<Bound>,
+    /// The rest net the bind was made on.
+    rest: Vec<Vec3>,
+}
+
+impl SurfaceBind {
+    /// The cached `(u₁, u₂, u₃)` of welded vertex `i`, if it projects onto the surface.
+    #[must_use]
+    pub fn coordinates(&self, i: u32) -> Option<Vec3> {
+        let s = *self.slot.get(i as usize)?;
+        let b = self.points.get(s as usize)?;
+        Some(Vec3::new(b.uv.0, b.uv.1, b.u3))
+    }
+}
+
+/// Closest point of the surface `net` to `x`: seeded at the nearest of the `samples`, then
+/// Gauss–Newton on `(S − x)·S_u = (S − x)·S_v = 0`, clamped to `[0, 1]²`.
+fn closest_point(
+    kv: &[KnotVector; 2],
+    net: &[Vec3],
+    samples: &[(f32, f32, Vec3)],
+    x: Vec3,
+) -> (f32, f32, [Vec3; 3]) {
+    let n_u = kv[0].count();
+    let (pu, pv) = (kv[0].degree(), kv[1].degree());
+    let (mut u, mut v, _) = samples
+        .iter()
+        .map(|&(u, v, p)| (u, v, p.distance_squared(x)))
+        .fold((0.5, 0.5, f32::INFINITY), |best, s| {
+            if s.2 < best.2 { s } else { best }
+        });
+    let mut s = eval_net(net, n_u, pu, pv, &bases(kv, u, v));
+    for _ in 0..32 {
+        let r = s[0] - x;
+        let (a, b, c) = (s[1].dot(s[1]), s[1].dot(s[2]), s[2].dot(s[2]));
+        let (g1, g2) = (r.dot(s[1]), r.dot(s[2]));
+        let det = a * c - b * b;
+        if det.is_nan() || det.abs() <= 1e-20 {
+            break;
+        }
+        let du = (c * g1 - b * g2) / det;
+        let dv = (a * g2 - b * g1) / det;
+        let (nu, nv) = ((u - du).clamp(0.0, 1.0), (v - dv).clamp(0.0, 1.0));
+        let step = (nu - u).abs() + (nv - v).abs();
+        (u, v) = (nu, nv);
+        s = eval_net(net, n_u, pu, pv, &bases(kv, u, v));
+        if step < 1e-7 {
+            break;
+        }
+    }
+    (u, v, s)
+}
+
+impl Deformer for ShapeSurfaceTool {
+    type Bind = SurfaceBind;
+
+    fn validate(&self, what: &str) -> Result<()> {
+        check_finite_vec3(|| format!("{what}: origin"), self.frame.origin)?;
+        check_finite_vec3(|| format!("{what}: u_edge"), self.frame.u_edge)?;
+        check_finite_vec3(|| format!("{what}: v_edge"), self.frame.v_edge)?;
+        let n = self.frame.u_edge.cross(self.frame.v_edge);
+        let scale = self.frame.u_edge.length() * self.frame.v_edge.length();
+        if n.length().is_nan() || n.length() <= 1e-6 * scale {
+            return Err(CoreError::Degenerate {
+                what: what.to_string(),
+                problem: "the surface frame is degenerate: u_edge and v_edge must be non-zero \
+                          and not parallel"
+                    .into(),
+            });
+        }
+        if self.knots().is_none() {
+            return Err(CoreError::OutOfRange {
+                what: format!("{what}: counts / degree"),
+                value: f64::from(self.counts.0.min(self.counts.1)),
+                expected: "each degree must be in [1, 15] and each count greater than its degree",
+            });
+        }
+        let total = self.counts.0 as usize * self.counts.1 as usize;
+        if total > 1 << 16 {
+            return Err(CoreError::OutOfRange {
+                what: format!("{what}: number of control points"),
+                value: total as f64,
+                expected: "must be at most 65536",
+            });
+        }
+        let in_range = |at: (u32, u32)| at.0 < self.counts.0 && at.1 < self.counts.1;
+        for (list, name) in [(&self.rest, "rest"), (&self.moves, "moves")] {
+            let mut seen = std::collections::HashSet::new();
+            for (k, e) in list.iter().enumerate() {
+                let w = format!("{what}: {name} {k} at {:?}", e.at);
+                if !in_range(e.at) || !seen.insert(e.at) {
+                    return Err(CoreError::Degenerate {
+                        what: w,
+                        problem: "the index is outside the grid or edited twice".into(),
+                    });
+                }
+                check_finite_vec3(|| format!("{w}: offset"), e.offset)?;
+            }
+        }
+        let mut seen = std::collections::HashSet::new();
+        for (k, e) in self.heights.iter().enumerate() {
+            let w = format!("{what}: heights {k} at {:?}", e.at);
+            if !in_range(e.at) || !seen.insert(e.at) {
+                return Err(CoreError::Degenerate {
+                    what: w,
+                    problem: "the index is outside the grid or edited twice".into(),
+                });
+            }
+            check_finite(|| format!("{w}: height"), e.height)?;
+        }
+        Ok(())
+    }
+
+    fn bind(&self, input: &BindInput<'_>) -> Result<SurfaceBind> {
+        let knots = self.knots().ok_or_else(|| CoreError::OutOfRange {
+            what: "shape surface: counts / degree".into(),
+            value: f64::from(self.counts.0.min(self.counts.1)),
+            expected: "each degree must be in [1, 15] and each count greater than its degree",
+        })?;
+        let (rest, _, _) = self.nets(&knots);
+        let n_u = self.counts.0 as usize;
+        let (pu, pv) = (knots[0].degree(), knots[1].degree());
+        // Seeds: a grid of surface samples, four per knot span.
+        let gu = (4 * (knots[0].count() - pu) + 1).min(129);
+        let gv = (4 * (knots[1].count() - pv) + 1).min(129);
+        let mut samples = Vec::with_capacity(gu * gv);
+        for j in 0..gv {
+            for i in 0..gu {
+                let (u, v) = (i as f32 / (gu - 1) as f32, j as f32 / (gv - 1) as f32);
+                samples.push((u, v, eval_net(&rest, n_u, pu, pv, &bases(&knots, u, v))[0]));
+            }
+        }
+        let size = self.frame.u_edge.length() + self.frame.v_edge.length();
+        let mut slot = vec![u32::MAX; input.positions.len()];
+        let mut points = Vec::with_capacity(input.active.len());
+        for &i in input.active {
+            let x = input.positions[i as usize];
+            let (u, v, s) = closest_point(&knots, &rest, &samples, x);
+            let n = s[1].cross(s[2]);
+            if n.length_squared().is_nan() || n.length_squared() <= 0.0 {
+                continue;
+            }
+            let n = n.normalize();
+            let r = x - s[0];
+            let u3 = r.dot(n);
+            // Projects along the normal: the residual is (nearly) normal to the surface.
+            if (r - n * u3).length() > 1e-4 * size {
+                continue;
+            }
+            slot[i as usize] = points.len() as u32;
+            points.push(Bound {
+                uv: (u, v),
+                u3,
+                normal: n,
+            });
+        }
+        Ok(SurfaceBind {
+            knots,
+            slot,
+            points,
+            rest,
+        })
+    }
+
+    fn deform(&self, bind: &SurfaceBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
+        let (_, moved, heights) = self.nets(&bind.knots);
+        let n_u = bind.knots[0].count();
+        let (pu, pv) = (bind.knots[0].degree(), bind.knots[1].degree());
+        let delta: Vec<Vec3> = moved.iter().zip(&bind.rest).map(|(m, r)| *m - *r).collect();
+        for (o, &i) in out.iter_mut().zip(active) {
+            let x = positions[i as usize];
+            let Some(b) = bind
+                .slot
+                .get(i as usize)
+                .and_then(|&s| bind.points.get(s as usize))
+            else {
+                *o = x;
+                continue;
+            };
+            let bs = bases(&bind.knots, b.uv.0, b.uv.1);
+            let d = eval_net(&delta, n_u, pu, pv, &bs);
+            let s_rest = eval_net(&bind.rest, n_u, pu, pv, &bs);
+            let n_rest = s_rest[1].cross(s_rest[2]).normalize_or(b.normal);
+            // A collapsed moved surface keeps the rest normal there.
+            let n_new = (s_rest[1] + d[1])
+                .cross(s_rest[2] + d[2])
+                .normalize_or(n_rest);
+            // H_z = 1 + Σ (h_ij − 1) Nᵢ Nⱼ (partition of unity), exactly 1 at rest.
+            let mut h = 1.0;
+            for j in 0..=pv {
+                for k in 0..=pu {
+                    h += (heights[bs.su + k + n_u * (bs.sv + j)] - 1.0) * bs.nu[k] * bs.nv[j];
+                }
+            }
+            *o = x + d[0] + (n_new * h - n_rest) * b.u3;
+        }
+    }
+
+    /// The frame and all offsets map affinely (points as points, offsets by the linear
+    /// part); heights are relative and do not change. Exact for similarity transforms; under
+    /// a non-uniform scale `u₃` is measured in the mapped space, as a distance must be.
+    fn transformed(&self, m: &Affine3A) -> Self {
+        let map = |e: &SurfaceEdit| SurfaceEdit {
+            at: e.at,
+            offset: m.transform_vector3(e.offset),
+        };
+        Self {
+            frame: SurfaceFrame {
+                origin: m.transform_point3(self.frame.origin),
+                u_edge: m.transform_vector3(self.frame.u_edge),
+                v_edge: m.transform_vector3(self.frame.v_edge),
+            },
+            rest: self.rest.iter().map(map).collect(),
+            moves: self.moves.iter().map(map).collect(),
+            ..self.clone()
+        }
+    }
+
+    /// The bind depends on the rest surface only: moves and heights reuse it.
+    fn same_rest_state(&self, other: &Self) -> bool {
+        self.frame == other.frame
+            && self.counts == other.counts
+            && self.degree == other.degree
+            && self.rest == other.rest
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::Topology;
+    use glam::Quat;
+
+    fn frame() -> SurfaceFrame {
+        SurfaceFrame {
+            origin: Vec3::new(-1.0, -1.0, 0.0),
+            u_edge: Vec3::new(2.0, 0.0, 0.0),
+            v_edge: Vec3::new(0.0, 2.0, 0.0),
+        }
+    }
+
+    fn slab() -> Vec<Vec3> {
+        let mut v = Vec::new();
+        for i in 0..21 {
+            for j in 0..5 {
+                for k in 0..3 {
+                    v.push(Vec3::new(
+                        i as f32 * 0.09 - 0.9,
+                        j as f32 * 0.2 - 0.4,
+                        0.05 + k as f32 * 0.05,
+                    ));
+                }
+            }
+        }
+        v
+    }
+
+    fn apply(tool: &ShapeSurfaceTool, pts: &[Vec3]) -> (Vec<Vec3>, SurfaceBind) {
+        tool.validate("t").unwrap();
+        let t = Topology {
+            weld: Vec::new(),
+            representative: Vec::new(),
+            triangles: Vec::new(),
+        };
+        let active: Vec<u32> = (0..pts.len() as u32).collect();
+        let bind = tool
+            .bind(&BindInput {
+                positions: pts,
+                topology: &t,
+                active: &active,
+            })
+            .unwrap();
+        let mut out = vec![Vec3::ZERO; pts.len()];
+        tool.deform(&bind, pts, &active, &mut out);
+        (out, bind)
+    }
+
+    #[test]
+    fn planar_unmoved_surface_is_identity_and_coordinates_are_right() {
+        let tool = ShapeSurfaceTool::planar(frame(), (6, 5));
+        let pts = slab();
+        let (out, bind) = apply(&tool, &pts);
+        assert!(out == pts, "the planar unmoved surface is the identity");
+        // (u₁, u₂, u₃) of (x, y, z) on the plane [−1, 1]² at z = 0: ((x+1)/2, (y+1)/2, z).
+        for (k, p) in pts.iter().enumerate() {
+            let c = bind.coordinates(k as u32).unwrap();
+            let e = Vec3::new((p.x + 1.0) / 2.0, (p.y + 1.0) / 2.0, p.z);
+            assert!((c - e).length() < 1e-5, "{p}: {c} vs {e}");
+        }
+    }
+
+    #[test]
+    fn translating_the_surface_translates_and_heights_scale_thickness() {
+        let mut tool = ShapeSurfaceTool::planar(frame(), (4, 4));
+        for i in 0..4 {
+            for j in 0..4 {
+                tool.moves.push(SurfaceEdit {
+                    at: (i, j),
+                    offset: Vec3::new(0.1, 0.0, 0.3),
+                });
+                tool.heights.push(HeightEdit {
+                    at: (i, j),
+                    height: 2.0,
+                });
+            }
+        }
+        let pts = slab();
+        let (out, _) = apply(&tool, &pts);
+        for (p, q) in pts.iter().zip(&out) {
+            // D = S' + 2·u₃·N: x, y shift by (0.1, 0), z = 0.3 + 2 z.
+            let e = Vec3::new(p.x + 0.1, p.y, 0.3 + 2.0 * p.z);
+            assert!((*q - e).length() < 1e-5, "{p}: {q} vs {e}");
+        }
+    }
+
+    #[test]
+    fn bending_the_surface_bends_a_slab_along_its_normal() {
+        // Lift the middle rows: the slab bends; each point stays at distance u₃ from S'
+        // along N', so the thickness of the slab is kept (the survey's D with H = 1).
+        let mut tool = ShapeSurfaceTool::planar(frame(), (5, 3));
+        tool.degree = (3, 2);
+        for j in 0..3 {
+            tool.moves.push(SurfaceEdit {
+                at: (2, j),
+                offset: Vec3::new(0.0, 0.0, 0.5),
+            });
+        }
+        let pts = slab();
+        let (out, bind) = apply(&tool, &pts);
+        let centre = out
+            .iter()
+            .zip(&pts)
+            .filter(|(_, p)| p.x.abs() < 1e-3)
+            .map(|(q, p)| q.z - p.z)
+            .fold(f32::INFINITY, f32::min);
+        assert!(centre > 0.2, "the middle rises: {centre}");
+        let knots = tool.knots().unwrap();
+        let (_, moved, _) = tool.nets(&knots);
+        for (k, q) in out.iter().enumerate() {
+            let c = bind.coordinates(k as u32).unwrap();
+            let s = eval_net(&moved, 5, 3, 2, &bases(&knots, c.x, c.y));
+            let n = s[1].cross(s[2]).normalize();
+            assert!((*q - (s[0] + n * c.z)).length() < 1e-4, "point {k}");
+        }
+    }
+
+    #[test]
+    fn newton_projects_onto_a_curved_rest_surface() {
+        // A bumped rest surface: the projection must satisfy (x − S)·S_u = (x − S)·S_v = 0.
+        let mut tool = ShapeSurfaceTool::planar(frame(), (5, 5));
+        tool.rest.push(SurfaceEdit {
+            at: (2, 2),
+            offset: Vec3::new(0.0, 0.0, 0.6),
+        });
+        let pts = slab();
+        let (out, bind) = apply(&tool, &pts);
+        assert!(out == pts, "unmoved: identity");
+        let knots = tool.knots().unwrap();
+        let (rest, _, _) = tool.nets(&knots);
+        let mut checked = 0;
+        for (k, p) in pts.iter().enumerate() {
+            let Some(c) = bind.coordinates(k as u32) else {
+                continue;
+            };
+            let s = eval_net(&rest, 5, 3, 3, &bases(&knots, c.x, c.y));
+            let r = *p - s[0];
+            assert!(r.dot(s[1].normalize()).abs() < 1e-4);
+            assert!(r.dot(s[2].normalize()).abs() < 1e-4);
+            checked += 1;
+        }
+        assert!(checked > pts.len() / 2);
+    }
+
+    #[test]
+    fn points_not_projecting_stay_and_bad_parameters_are_errors() {
+        let mut tool = ShapeSurfaceTool::planar(frame(), (4, 4));
+        tool.moves.push(SurfaceEdit {
+            at: (3, 3),
+            offset: Vec3::new(0.0, 0.0, 1.0),
+        });
+        let far = Vec3::new(3.0, 0.0, 0.1);
+        let (out, _) = apply(&tool, &[far]);
+        assert_eq!(out[0], far);
+        let flat = SurfaceFrame {
+            v_edge: Vec3::new(4.0, 0.0, 0.0),
+            ..frame()
+        };
+        assert!(
+            ShapeSurfaceTool::planar(flat, (4, 4))
+                .validate("t")
+                .is_err()
+        );
+        assert!(
+            ShapeSurfaceTool::planar(frame(), (3, 4))
+                .validate("t")
+                .is_err()
+        );
+        let mut t = ShapeSurfaceTool::planar(frame(), (4, 4));
+        t.heights.push(HeightEdit {
+            at: (0, 0),
+            height: f32::NAN,
+        });
+        assert!(matches!(t.validate("t"), Err(CoreError::NotFinite { .. })));
+        let mut t = ShapeSurfaceTool::planar(frame(), (4, 4));
+        t.moves.push(SurfaceEdit {
+            at: (4, 0),
+            offset: Vec3::X,
+        });
+        assert!(t.validate("t").is_err());
+    }
+
+    #[test]
+    fn transformed_commutes() {
+        let mut tool = ShapeSurfaceTool::planar(frame(), (5, 4));
+        tool.moves.push(SurfaceEdit {
+            at: (2, 1),
+            offset: Vec3::new(0.1, 0.2, 0.4),
+        });
+        tool.heights.push(HeightEdit {
+            at: (1, 2),
+            height: 1.5,
+        });
+        let m = Affine3A::from_scale_rotation_translation(
+            Vec3::splat(1.7),
+            Quat::from_axis_angle(Vec3::new(0.2, 1.0, 0.5).normalize(), 0.9),
+            Vec3::new(0.3, -2.0, 1.0),
+        );
+        let pts = slab();
+        let a: Vec<Vec3> = apply(&tool, &pts)
+            .0
+            .iter()
+            .map(|p| m.transform_point3(*p))
+            .collect();
+        let mp: Vec<Vec3> = pts.iter().map(|p| m.transform_point3(*p)).collect();
+        let b = apply(&tool.transformed(&m), &mp).0;
+        for (x, y) in a.iter().zip(&b) {
+            assert!((*x - *y).length() < 1e-4, "{x} vs {y}");
+        }
+    }
+}
