@@ -109,16 +109,17 @@ impl Document {
                     let area = match &inf.area {
                         None => None,
                         Some(a) => {
-                            let def = node.areas.get(a).ok_or_else(|| SceneError::UnknownArea {
-                                mesh: mesh.to_owned(),
-                                layer: i,
-                                area: a.clone(),
-                            })?;
-                            Some(resolve_area(
-                                def,
-                                rest,
-                                &format!("mesh '{mesh}', area '{a}'"),
-                            )?)
+                            if !areas.contains_key(a.as_str()) {
+                                let def =
+                                    node.areas.get(a).ok_or_else(|| SceneError::UnknownArea {
+                                        mesh: mesh.to_owned(),
+                                        layer: i,
+                                        area: a.clone(),
+                                    })?;
+                                let what = format!("mesh '{mesh}', area '{a}'");
+                                areas.insert(a.as_str(), resolve_area(def, rest, &what)?);
+                            }
+                            areas.get(a.as_str()).cloned()
                         }
                     };
                     Some(Influence {
