@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::curve::{CurveBasis, CurveEvaluator, validate_polygon};
 use crate::error::{CoreError, Result, check_finite};
-use crate::frames::{Frame, closest_on_polyline, double_reflection, polyline_tangents};
+use crate::frames::{Frame, PolylineIndex, double_reflection, polyline_tangents};
 use crate::influence::Falloff;
 use crate::tool::{BindInput, Deformer, uniform_scale};
 
@@ -121,6 +121,9 @@ pub struct SampledAxis {
     pub twist: Vec<f32>,
     /// Scale `θ` at each sample.
     pub scale: Vec<f32>,
+    /// The start of the frame propagation: first unit tangent and the normal given to
+    /// [`double_reflection`].
+    start: Frame,
 }
 
 impl SampledAxis {
@@ -202,18 +205,19 @@ impl SampledAxis {
             rotations: frames.iter().map(Frame::rotation).collect(),
             twist,
             scale,
+            start: Frame {
+                tangent: t0,
+                normal: n0,
+                binormal: t0.cross(n0),
+            },
         })
     }
 
-    /// The first frame.
+    /// The start of the frame propagation (first unit tangent and first normal). Passing it
+    /// to [`SampledAxis::new`] for an equal state reproduces the frames bit for bit.
     #[must_use]
     pub fn first_frame(&self) -> Frame {
-        let m = Mat3::from_quat(self.rotations[0]);
-        Frame {
-            tangent: m.x_axis,
-            normal: m.y_axis,
-            binormal: m.z_axis,
-        }
+        self.start
     }
 
     /// Axis point `A` and local-to-world map `M = R W S` at fraction `f` of sample segment
@@ -232,13 +236,15 @@ impl SampledAxis {
 }
 
 /// Bind of an [`AxialTool`]: the sampled rest axis, and per welded vertex (indexed by vertex
-/// number) its sample segment, fraction, local coordinates `l` and zone weight `w`.
+/// number) its sample segment, fraction, local coordinates `l`, the rest-state image
+/// `A_U + M₁ l` (≈ `U`) and the zone weight `w`.
 #[derive(Debug, Clone)]
 pub struct AxialBind {
     rest: SampledAxis,
     segment: Vec<u32>,
     fraction: Vec<f32>,
     local: Vec<Vec3>,
+    base: Vec<Vec3>,
     weight: Vec<f32>,
 }
 
@@ -328,13 +334,19 @@ impl Deformer for AxialTool {
             segment: vec![0; n],
             fraction: vec![0.0; n],
             local: vec![Vec3::ZERO; n],
+            base: vec![Vec3::ZERO; n],
             weight: vec![0.0; n],
             rest,
         };
+        let index =
+            PolylineIndex::new(bind.rest.points.clone()).ok_or_else(|| CoreError::Degenerate {
+                what: "axial tool: rest axis".to_owned(),
+                problem: "fewer than 2 samples".to_owned(),
+            })?;
         let inv_r = 1.0 / self.radius;
         for &i in input.active {
             let u = input.positions[i as usize];
-            let (j, f, d2) = closest_on_polyline(&bind.rest.points, u);
+            let (j, f, d2) = index.closest(u);
             let w = self.falloff.weight(d2.sqrt() * inv_r, self.inner);
             if w <= 0.0 {
                 continue;
@@ -346,6 +358,7 @@ impl Deformer for AxialTool {
             bind.segment[k] = j as u32;
             bind.fraction[k] = f;
             bind.local[k] = local;
+            bind.base[k] = a + m * local;
             bind.weight[k] = w;
         }
         Ok(bind)
@@ -374,10 +387,10 @@ impl Deformer for AxialTool {
                 continue;
             }
             let (j, f, l) = (bind.segment[k] as usize, bind.fraction[k], bind.local[k]);
-            let (a1, m1) = bind.rest.at(j, f);
             let (a2, m2) = deformed.at(j, f);
-            // D(U) − U = (A' − A) + (M₂ − M₁) l, exactly 0 for an unmoved axis.
-            let d = (a2 - a1) + (m2 - m1) * l;
+            // D(U) − U = (A' + M₂ l) − (A + M₁ l): the second term was computed at bind time
+            // by the same operations, so the difference is exactly 0 for an unmoved axis.
+            let d = (a2 + m2 * l) - bind.base[k];
             *o = if w == 1.0 { u + d } else { u + d * w };
         }
     }
@@ -416,29 +429,9 @@ impl Deformer for AxialTool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::Topology;
+    use crate::curve::tests::run;
     use proptest::prelude::*;
     use std::f32::consts::{FRAC_PI_2, PI};
-
-    fn run(tool: &AxialTool, pts: &[Vec3]) -> Vec<Vec3> {
-        tool.validate("t").unwrap();
-        let topo = Topology {
-            weld: vec![],
-            representative: vec![],
-            triangles: vec![],
-        };
-        let active: Vec<u32> = (0..pts.len() as u32).collect();
-        let bind = tool
-            .bind(&BindInput {
-                positions: pts,
-                topology: &topo,
-                active: &active,
-            })
-            .unwrap();
-        let mut out = vec![Vec3::ZERO; pts.len()];
-        tool.deform(&bind, pts, &active, &mut out);
-        out
-    }
 
     fn line(count: usize, from: Vec3, to: Vec3) -> Vec<AxisPoint> {
         (0..count)
@@ -702,6 +695,24 @@ mod tests {
                 assert!(x.distance(*y) < 1e-4, "{x} vs {y}");
             }
         }
+    }
+
+    #[test]
+    fn ron_defaults_and_round_trip() {
+        let text = "(rest: [(position: (0.0, 0.0, 0.0)), (position: (1.0, 0.0, 0.0))], \
+                    deformed: [(position: (0.0, 0.0, 0.0)), (position: (1.0, 0.5, 0.0), twist: 0.3, scale: 2.0)], \
+                    radius: 0.5)";
+        let tool: AxialTool = ron::from_str(text).unwrap();
+        assert_eq!(tool.shape, AxisShape::Polyline);
+        assert_eq!(tool.falloff, Falloff::Smooth);
+        assert_eq!(tool.inner, 0.0);
+        assert_eq!((tool.rest[1].twist, tool.rest[1].scale), (0.0, 1.0));
+        assert_eq!((tool.deformed[1].twist, tool.deformed[1].scale), (0.3, 2.0));
+        let back: AxialTool = ron::from_str(&ron::to_string(&tool).unwrap()).unwrap();
+        assert_eq!(back, tool);
+        assert!(
+            ron::from_str::<AxialTool>("(rest: [], deformed: [], radius: 1.0, bogus: 1)").is_err()
+        );
     }
 
     proptest! {

@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all, bernstein_all_with_derivative};
 use crate::error::{CoreError, Result, check_finite_vec3};
-use crate::frames::closest_on_polyline;
+use crate::frames::PolylineIndex;
 use crate::tool::{BindInput, Deformer};
 
 /// Largest number of control points a Bézier polygon may have (degree [`MAX_DEGREE`]).
@@ -215,13 +215,13 @@ impl CurveEvaluator {
     }
 
     /// The parameter of the point of the curve closest to `x`: the closest point of the
-    /// polyline `samples` (the curve at `t = k / (samples.len() − 1)`), refined by
+    /// indexed polyline `samples` (from [`CurveEvaluator::samples`]), refined by
     /// Gauss–Newton steps `t ← t − (C − x)·C' / |C'|²` clamped to `[0, 1]` and kept only
     /// while they bring the point closer. Returns `(t, |x − C(t)|²)`.
     #[must_use]
-    pub fn closest_parameter(&self, ctrl: &[Vec3], samples: &[Vec3], x: Vec3) -> (f32, f32) {
-        let (s, f, _) = closest_on_polyline(samples, x);
-        let step = 1.0 / (samples.len() - 1) as f32;
+    pub fn closest_parameter(&self, ctrl: &[Vec3], samples: &PolylineIndex, x: Vec3) -> (f32, f32) {
+        let (s, f, _) = samples.closest(x);
+        let step = 1.0 / (samples.points().len() - 1) as f32;
         let mut t = ((s as f32 + f) * step).clamp(0.0, 1.0);
         let mut best = self.point(ctrl, t).distance_squared(x);
         for _ in 0..REFINE_STEPS {
@@ -242,13 +242,16 @@ impl CurveEvaluator {
         (t, best)
     }
 
-    /// The curve sampled at `t = k / m`, `k = 0..=m`, with `m = 16 · count`.
+    /// The curve sampled at `t = k / m`, `k = 0..=m`, with `m = 16 · count`, indexed for
+    /// closest-point queries.
     #[must_use]
-    pub fn samples(&self, ctrl: &[Vec3]) -> Vec<Vec3> {
+    pub fn samples(&self, ctrl: &[Vec3]) -> PolylineIndex {
         let m = SAMPLES_PER_POINT * self.count;
-        (0..=m)
+        let points = (0..=m)
             .map(|k| self.point(ctrl, k as f32 / m as f32))
-            .collect()
+            .collect();
+        // m ≥ 32, so the index always exists.
+        PolylineIndex::new(points).unwrap_or_else(|| unreachable!("at least two samples"))
     }
 }
 
@@ -423,12 +426,13 @@ impl Deformer for CurveTool {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::mesh::Topology;
     use proptest::prelude::*;
 
-    fn run(tool: &CurveTool, pts: &[Vec3]) -> Vec<Vec3> {
+    /// Validates, binds on `pts` (all active, no topology) and deforms them.
+    pub(crate) fn run<T: Deformer>(tool: &T, pts: &[Vec3]) -> Vec<Vec3> {
         tool.validate("t").unwrap();
         let topo = Topology {
             weld: vec![],
@@ -717,6 +721,17 @@ mod tests {
         for (x, y) in a.iter().zip(&b) {
             assert!(x.distance(*y) < 1e-4, "{x} vs {y}");
         }
+    }
+
+    #[test]
+    fn ron_round_trip() {
+        let text = "(basis: BSpline(degree: 2), rest: [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (2.0, 0.0, 0.0)], \
+                    deformed: [(0.0, 0.0, 0.0), (1.0, 1.0, 0.0), (2.0, 0.0, 0.0)])";
+        let tool: CurveTool = ron::from_str(text).unwrap();
+        assert_eq!(tool.basis, CurveBasis::BSpline { degree: 2 });
+        assert_eq!(tool.deformed[1], Vec3::new(1.0, 1.0, 0.0));
+        let back: CurveTool = ron::from_str(&ron::to_string(&tool).unwrap()).unwrap();
+        assert_eq!(back, tool);
     }
 
     proptest! {

@@ -171,6 +171,79 @@ pub fn closest_on_polyline(points: &[Vec3], x: Vec3) -> (usize, f32, f32) {
     best
 }
 
+/// Segments per block of a [`PolylineIndex`].
+const BLOCK: usize = 8;
+
+/// A polyline with bounding spheres over blocks of consecutive segments, for fast repeated
+/// closest-point queries (the same answer as [`closest_on_polyline`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PolylineIndex {
+    points: Vec<Vec3>,
+    /// Per block: first segment, one past the last segment, sphere centre and radius.
+    blocks: Vec<(usize, usize, Vec3, f32)>,
+}
+
+impl PolylineIndex {
+    /// Indexes a polyline of at least two points. Returns `None` for fewer points.
+    #[must_use]
+    pub fn new(points: Vec<Vec3>) -> Option<Self> {
+        if points.len() < 2 {
+            return None;
+        }
+        let segments = points.len() - 1;
+        let blocks = (0..segments)
+            .step_by(BLOCK)
+            .map(|first| {
+                let end = (first + BLOCK).min(segments);
+                let span = &points[first..=end];
+                let (lo, hi) = span
+                    .iter()
+                    .fold((span[0], span[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+                let centre = (lo + hi) * 0.5;
+                let radius = span.iter().map(|p| p.distance(centre)).fold(0.0, f32::max);
+                (first, end, centre, radius)
+            })
+            .collect();
+        Some(Self { points, blocks })
+    }
+
+    /// The indexed points.
+    #[must_use]
+    pub fn points(&self) -> &[Vec3] {
+        &self.points
+    }
+
+    /// Like [`closest_on_polyline`]: `(segment, fraction, squared distance)`. Blocks whose
+    /// bounding sphere is farther than the best distance found so far are skipped, starting
+    /// from the block nearest to `x`.
+    #[must_use]
+    pub fn closest(&self, x: Vec3) -> (usize, f32, f32) {
+        let bound = |b: &(usize, usize, Vec3, f32)| (x.distance(b.2) - b.3).max(0.0);
+        let start = (0..self.blocks.len())
+            .min_by(|&a, &b| bound(&self.blocks[a]).total_cmp(&bound(&self.blocks[b])))
+            .unwrap_or(0);
+        let search = |b: &(usize, usize, Vec3, f32)| {
+            let (s, f, d2) = closest_on_polyline(&self.points[b.0..=b.1], x);
+            (s + b.0, f, d2)
+        };
+        let mut best = search(&self.blocks[start]);
+        for (k, b) in self.blocks.iter().enumerate() {
+            if k == start {
+                continue;
+            }
+            let lb = bound(b);
+            if lb * lb <= best.2 {
+                let c = search(b);
+                // Ties go to the earlier segment, as in `closest_on_polyline`.
+                if c.2 < best.2 || (c.2 == best.2 && c.0 < best.0) {
+                    best = c;
+                }
+            }
+        }
+        best
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -264,6 +337,28 @@ mod tests {
         assert!(polyline_tangents(&[Vec3::ZERO]).is_none());
         assert!(Frame::from_tangent(Vec3::ZERO).is_none());
         assert!(Frame::from_tangent(Vec3::NAN).is_none());
+    }
+
+    #[test]
+    fn index_agrees_with_brute_force() {
+        let pl: Vec<Vec3> = (0..70)
+            .map(|k| {
+                let s = k as f32 * 0.2;
+                Vec3::new(s.cos(), s.sin(), 0.1 * s)
+            })
+            .collect();
+        let index = PolylineIndex::new(pl.clone()).unwrap();
+        for i in 0..300 {
+            let x = Vec3::new(
+                (i as f32 * 0.37).sin() * 2.0,
+                (i as f32 * 0.71).cos() * 2.0,
+                i as f32 * 0.005,
+            );
+            let (s, f, d2) = closest_on_polyline(&pl, x);
+            let (si, fi, d2i) = index.closest(x);
+            assert_eq!(d2, d2i, "{x}");
+            assert!(s == si && f == fi || d2 == d2i);
+        }
     }
 
     #[test]

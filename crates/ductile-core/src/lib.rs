@@ -16,6 +16,7 @@ pub mod error;
 pub mod ffsd;
 pub mod frames;
 pub mod influence;
+pub mod lattice;
 pub mod mesh;
 pub mod normals;
 pub mod sketch;

@@ -18,6 +18,7 @@ use crate::axial::{AxialBind, AxialTool};
 use crate::curve::{CurveBind, CurveTool};
 use crate::error::Result;
 use crate::ffsd::{FfsdBind, FfsdTool};
+use crate::lattice::{LatticeTool, PreparedLattice};
 use crate::mesh::Topology;
 
 /// What a tool sees when it binds: the layer's input.
@@ -66,6 +67,8 @@ pub enum Tool {
     Axial(AxialTool),
     /// Curve deformation by De Casteljau / De Boor (Chang & Rockwood 1994; survey §4.2).
     Curve(CurveTool),
+    /// Lattice FFD: Bernstein (Sederberg–Parry), B-spline and rational lattices.
+    Lattice(LatticeTool),
 }
 
 /// The bind of a [`Tool`].
@@ -77,6 +80,8 @@ pub enum ToolBind {
     Axial(AxialBind),
     /// Bind of [`Tool::Curve`].
     Curve(CurveBind),
+    /// Bind of [`Tool::Lattice`].
+    Lattice(Box<PreparedLattice>),
 }
 
 impl Tool {
@@ -87,6 +92,7 @@ impl Tool {
             Tool::Ffsd(_) => "FFSD control points",
             Tool::Axial(_) => "axial deformation",
             Tool::Curve(_) => "curve deformation",
+            Tool::Lattice(_) => "lattice FFD",
         }
     }
 
@@ -96,6 +102,7 @@ impl Tool {
             Tool::Ffsd(t) => t.validate(what),
             Tool::Axial(t) => t.validate(what),
             Tool::Curve(t) => t.validate(what),
+            Tool::Lattice(t) => t.validate(what),
         }
     }
 
@@ -105,6 +112,7 @@ impl Tool {
             Tool::Ffsd(t) => ToolBind::Ffsd(t.bind(input)?),
             Tool::Axial(t) => ToolBind::Axial(t.bind(input)?),
             Tool::Curve(t) => ToolBind::Curve(t.bind(input)?),
+            Tool::Lattice(t) => ToolBind::Lattice(Box::new(t.bind(input)?)),
         })
     }
 
@@ -115,6 +123,7 @@ impl Tool {
             (Tool::Ffsd(t), ToolBind::Ffsd(b)) => t.deform(b, positions, active, out),
             (Tool::Axial(t), ToolBind::Axial(b)) => t.deform(b, positions, active, out),
             (Tool::Curve(t), ToolBind::Curve(b)) => t.deform(b, positions, active, out),
+            (Tool::Lattice(t), ToolBind::Lattice(b)) => t.deform(b, positions, active, out),
             #[allow(unreachable_patterns)]
             _ => {
                 for (o, &i) in out.iter_mut().zip(active) {
@@ -131,6 +140,7 @@ impl Tool {
             Tool::Ffsd(t) => Tool::Ffsd(t.transformed(m)),
             Tool::Axial(t) => Tool::Axial(t.transformed(m)),
             Tool::Curve(t) => Tool::Curve(t.transformed(m)),
+            Tool::Lattice(t) => Tool::Lattice(t.transformed(m)),
         }
     }
 
@@ -141,6 +151,7 @@ impl Tool {
             (Tool::Ffsd(a), Tool::Ffsd(b)) => a.same_rest_state(b),
             (Tool::Axial(a), Tool::Axial(b)) => a.same_rest_state(b),
             (Tool::Curve(a), Tool::Curve(b)) => a.same_rest_state(b),
+            (Tool::Lattice(a), Tool::Lattice(b)) => a.same_rest_state(b),
             #[allow(unreachable_patterns)]
             _ => false,
         }

@@ -2,4 +2,8 @@
 //! (I3D 2005): strokes drawn in the image plane bend and twist a region of the mesh.
 
 pub mod camera;
+pub mod cut;
 pub mod partition;
+pub mod raycast;
+pub mod roi;
+pub mod stroke;
