@@ -1,0 +1,69 @@
+//! Mesh import rules on a hand-written glTF (`tests/data/transformed.gltf`): node world
+//! transforms, mirrored winding, non-indexed primitives, `#name` selection.
+
+#![allow(clippy::unwrap_used)] // Tests may unwrap (house rules).
+
+mod common;
+
+use common::data;
+use ductile_io::{IoError, MeshRef, load_mesh};
+use glam::Vec3;
+
+fn load(spec: &str) -> Result<ductile_core::mesh::Mesh, IoError> {
+    load_mesh(&MeshRef::parse(&format!(
+        "{}{spec}",
+        data("transformed.gltf").display()
+    )))
+}
+
+#[test]
+fn instances_are_merged_with_world_transforms() {
+    let m = load("").unwrap();
+    // `child` = translate (1, 2, 3) · scale 2; `mirror` = translate (1, 2, 3) · scale (−1, 1, 1).
+    let expected = [
+        Vec3::new(1.0, 2.0, 3.0),
+        Vec3::new(3.0, 2.0, 3.0),
+        Vec3::new(1.0, 4.0, 3.0),
+        Vec3::new(1.0, 2.0, 3.0),
+        Vec3::new(0.0, 2.0, 3.0),
+        Vec3::new(1.0, 3.0, 3.0),
+    ];
+    assert_eq!(m.positions, expected);
+    // Non-indexed primitives get sequential indices; the mirrored copy has its winding
+    // flipped so that it still faces outwards.
+    assert_eq!(m.indices, vec![0, 1, 2, 3, 5, 4]);
+    assert_eq!(m.normals, None);
+    assert_eq!(m.uvs, None);
+}
+
+#[test]
+fn a_name_selects_one_gltf_mesh() {
+    assert_eq!(load("#tri").unwrap().positions.len(), 6);
+    // `quad` is in the file but in no scene node: taken once, untransformed.
+    let quad = load("#quad").unwrap();
+    assert_eq!(quad.positions[2], Vec3::new(1.0, 1.0, 0.0));
+    assert_eq!(quad.indices, vec![0, 1, 2, 0, 2, 3]);
+    let err = load("#nope").unwrap_err().to_string();
+    assert!(
+        err.contains("there is no glTF mesh named 'nope' (available: tri, quad)"),
+        "{err}"
+    );
+}
+
+#[test]
+fn unsupported_extensions_and_missing_files_are_named() {
+    let err = load_mesh(&MeshRef::parse("mesh.stl"))
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        err,
+        "mesh.stl: unsupported file extension 'stl' (expected .glb, .gltf or .obj)"
+    );
+    let err = load_mesh(&MeshRef::parse("nowhere/mesh.glb"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with("nowhere/mesh.glb: cannot read the file"),
+        "{err}"
+    );
+}
