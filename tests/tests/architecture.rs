@@ -14,10 +14,10 @@ use std::path::Path;
 
 mod common;
 
-/// Normal dependencies `ductile-core` may have (numeric crates the lead allows go here).
-/// `pathfinding` (graph algorithms: the sketch tool's min-cut) was merged into core by the
-/// lead.
-const CORE_ALLOWED: &[&str] = &["glam", "serde", "thiserror", "rayon", "faer", "pathfinding"];
+/// Normal dependencies `ductile-core` may have: math, serialisation, errors, parallelism, and
+/// the numeric/graph crates its solvers use (faer for linear algebra, petgraph for the
+/// sketch tool's minimum cut).
+const CORE_ALLOWED: &[&str] = &["glam", "serde", "thiserror", "rayon", "faer", "petgraph"];
 /// Dependencies the pure crates (core, scene) must never have.
 const PURE_FORBIDDEN: &[&str] = &["bevy", "egui", "bevy_egui", "gltf", "ron"];
 /// Engine and UI crates.

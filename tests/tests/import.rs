@@ -67,3 +67,55 @@ fn unsupported_extensions_and_missing_files_are_named() {
         "{err}"
     );
 }
+
+/// Loads a corrupted copy of `transformed.gltf` (`from` replaced by `to`).
+fn load_corrupted(from: &str, to: &str, select: &str) -> String {
+    let text = std::fs::read_to_string(data("transformed.gltf")).unwrap();
+    assert!(text.contains(from), "{from}");
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("bad.gltf");
+    std::fs::write(&p, text.replacen(from, to, 1)).unwrap();
+    load_mesh(&MeshRef::parse(&format!("{}{select}", p.display())))
+        .unwrap_err()
+        .to_string()
+}
+
+#[test]
+fn corrupt_gltf_files_are_errors_not_panics() {
+    let e = load_corrupted(
+        "\"name\": \"child\",",
+        "\"name\": \"child\", \"children\": [0],",
+        "",
+    );
+    assert!(
+        e.contains("invalid glTF: the node hierarchy has a cycle"),
+        "{e}"
+    );
+    let e = load_corrupted("\"indices\": 2", "\"indices\": 1", "#quad");
+    assert!(
+        e.contains("glTF mesh 'quad', primitive 0: indices have an invalid accessor type"),
+        "{e}"
+    );
+    let e = load_corrupted("\"count\": 3,", "\"count\": 300,", "");
+    assert!(
+        e.contains("glTF mesh 'tri', primitive 0: POSITION cannot be read"),
+        "{e}"
+    );
+    let e = load_corrupted("\"version\": \"2.0\"", "\"version\": 2", "");
+    assert!(e.contains("invalid glTF"), "{e}");
+}
+
+#[test]
+fn truncated_binary_gltf_is_an_error() {
+    let head = common::root().join("assets/meshes/lee-perry-smith-head.glb");
+    let bytes = std::fs::read(head).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    for len in [0, 11, 20, 5000, bytes.len() - 1] {
+        let p = dir.path().join("cut.glb");
+        std::fs::write(&p, &bytes[..len]).unwrap();
+        let e = load_mesh(&MeshRef::parse(p.to_str().unwrap()))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("cut.glb: invalid glTF"), "{len}: {e}");
+    }
+}

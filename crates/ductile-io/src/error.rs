@@ -83,6 +83,14 @@ pub enum IoError {
         /// The decoder's error.
         source: gltf::Error,
     },
+    /// The glTF file is structurally invalid in a way the decoder does not check.
+    #[error("{}: invalid glTF: {problem}", path.display())]
+    GltfStructure {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        problem: String,
+    },
     /// A glTF primitive lacks data the importer needs.
     #[error("{}: glTF mesh '{mesh}', primitive {primitive}: {problem}", path.display())]
     GltfPrimitive {
@@ -128,8 +136,8 @@ pub enum IoError {
         vertices: usize,
     },
     /// The imported mesh is not usable (indices out of range, non-finite positions, every
-    /// triangle degenerate, ...).
-    #[error("{}: {source}", path.display())]
+    /// triangle degenerate, ...). Core's message already starts with the file name.
+    #[error("{source}")]
     InvalidMesh {
         /// The file.
         path: PathBuf,

@@ -256,22 +256,27 @@ fn load_gltf(path: &Path, select: Option<&str>) -> Result<Mesh> {
         .or_else(|| document.scenes().next())
     {
         Some(scene) => {
-            let mut stack: Vec<(gltf::Node<'_>, Mat4)> =
-                scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+            let mut stack: Vec<(gltf::Node<'_>, Mat4, usize)> =
+                scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
             stack.reverse();
-            // Depth-first, children in order; glTF forbids cycles and the crate validates
-            // node indices, but a depth cap guards against malformed files anyway.
-            let mut visited = 0usize;
-            while let Some((node, parent)) = stack.pop() {
-                visited += 1;
-                if visited > 1_000_000 {
-                    break;
+            // Depth-first, children in order. The gltf crate checks node indices but not
+            // cycles: a path deeper than the node count has one.
+            let node_count = document.nodes().count();
+            while let Some((node, parent, depth)) = stack.pop() {
+                if depth > node_count {
+                    return Err(IoError::GltfStructure {
+                        path: path.to_owned(),
+                        problem: format!(
+                            "the node hierarchy has a cycle (through node {})",
+                            node.index()
+                        ),
+                    });
                 }
                 let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
                 if let Some(mesh) = node.mesh() {
                     instances.push((mesh, world));
                 }
-                let mut children: Vec<_> = node.children().map(|c| (c, world)).collect();
+                let mut children: Vec<_> = node.children().map(|c| (c, world, depth + 1)).collect();
                 children.reverse();
                 stack.extend(children);
             }
@@ -321,10 +326,13 @@ fn load_gltf(path: &Path, select: Option<&str>) -> Result<Mesh> {
                 primitive: k,
                 problem: problem.to_owned(),
             };
+            check_accessors(&prim).map_err(|p| bad(&p))?;
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
             let positions: Vec<Vec3> = reader
                 .read_positions()
-                .ok_or_else(|| bad("no POSITION attribute"))?
+                .ok_or_else(|| {
+                    bad("POSITION cannot be read (missing, or its accessor does not fit its buffer)")
+                })?
                 .map(Vec3::from)
                 .collect();
             let normals: Option<Vec<Vec3>> =
@@ -347,6 +355,46 @@ fn load_gltf(path: &Path, select: Option<&str>) -> Result<Mesh> {
         }
     }
     Ok(merger.finish())
+}
+
+/// Checks the types of the accessors the importer reads (the gltf crate's reader assumes
+/// them and would panic on others): `POSITION` and `NORMAL` float VEC3, `TEXCOORD_0` VEC2 of
+/// float or normalised unsigned byte/short, indices unsigned SCALAR.
+fn check_accessors(prim: &gltf::Primitive<'_>) -> std::result::Result<(), String> {
+    use gltf::accessor::{DataType, Dimensions};
+    use gltf::mesh::Semantic;
+    let describe = |a: &gltf::Accessor<'_>| format!("{:?} {:?}", a.data_type(), a.dimensions());
+    for (semantic, a) in prim.attributes() {
+        let ok = match semantic {
+            Semantic::Positions | Semantic::Normals => {
+                a.data_type() == DataType::F32 && a.dimensions() == Dimensions::Vec3
+            }
+            Semantic::TexCoords(0) => {
+                a.dimensions() == Dimensions::Vec2
+                    && matches!(a.data_type(), DataType::F32 | DataType::U8 | DataType::U16)
+            }
+            _ => true,
+        };
+        if !ok {
+            return Err(format!(
+                "attribute {semantic:?} has an invalid accessor type ({})",
+                describe(&a)
+            ));
+        }
+        if a.sparse().is_none() && a.view().is_none() {
+            return Err(format!("attribute {semantic:?} has no buffer view"));
+        }
+    }
+    if let Some(a) = prim.indices()
+        && (a.dimensions() != Dimensions::Scalar
+            || !matches!(a.data_type(), DataType::U8 | DataType::U16 | DataType::U32))
+    {
+        return Err(format!(
+            "indices have an invalid accessor type ({})",
+            describe(&a)
+        ));
+    }
+    Ok(())
 }
 
 /// Turns strip or fan indices into a triangle list (glTF 2.0 §3.7.2.1).
