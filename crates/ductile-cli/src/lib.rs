@@ -30,6 +30,11 @@ pub enum Command {
     Info(commands::info::Args),
     /// Time the evaluation of every mesh's stack.
     Bench(commands::bench::Args),
+    /// Replay a history file step by step and export the meshes (at the end, or every K
+    /// steps).
+    Replay(commands::replay::Args),
+    /// List the steps of a history file (index, time, label).
+    History(commands::history::Args),
 }
 
 /// Parses `args` (the first item is the program name) and runs the command, writing its
@@ -46,6 +51,8 @@ where
         Command::Check(a) => commands::check::run(&a, out),
         Command::Info(a) => commands::info::run(&a, out),
         Command::Bench(a) => commands::bench::run(&a, out),
+        Command::Replay(a) => commands::replay::run(&a, out),
+        Command::History(a) => commands::history::run(&a, out),
     }
 }
 

@@ -1,9 +1,9 @@
 //! History benchmarks.
 //!
 //! * `replay/10k ops + 1 evaluation`: replay 10,000 mixed operations (macro values,
-//!   transforms, layer toggles) on an identikit-like head document — the Lee Perry-Smith
-//!   head with 30 FFSD macro tools of 3 points, each limited to its own area — then evaluate
-//!   the head once. Target: ≤ 1 s.
+//!   transforms, layer toggles) on the identikit scene `scenes/identikit-head.ron` (the Lee
+//!   Perry-Smith head with its FFSD macro tools, each limited to an area), then evaluate the
+//!   head once. Target: ≤ 1 s.
 //! * `undo+redo/N`: one undo followed by one redo at the end of a history of N steps, for
 //!   N = 1,000 and 100,000: the times must be about equal (cost of the operation, not of the
 //!   history).
@@ -13,8 +13,7 @@
 use std::collections::BTreeMap;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use ductile_core::ffsd::{ControlPoint, FfsdMacro, HeightLimit};
-use ductile_core::influence::Shape;
+use ductile_core::ffsd::FfsdMacro;
 use ductile_core::mesh::{Mesh, RestMesh};
 use ductile_history::prelude::*;
 use ductile_scene::prelude::*;
@@ -24,7 +23,10 @@ const HEAD: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../../assets/meshes/lee-perry-smith-head.glb"
 );
-const MACROS: usize = 30;
+const SCENE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../scenes/identikit-head.ron"
+);
 
 /// Every triangle primitive of the glTF file, merged into one mesh (node transforms are
 /// ignored: the head is a single mesh in its own space).
@@ -61,83 +63,42 @@ fn load_head() -> RestMesh {
     .expect("valid head mesh")
 }
 
-/// The identikit-like document: mesh "head", macro tools `m0..m29` (macros `f0..f29`), each
-/// on its own layer limited to area `a0..a29`, a sphere of 8 % of the head's size around a
-/// surface point.
-fn head_document(rest: &RestMesh) -> Document {
-    let welded = rest.welded_positions();
-    let (lo, hi) = ductile_core::mesh::bounds(welded).expect("non-empty");
-    let centre = 0.5 * (lo + hi);
-    let size = (hi - lo).max_element();
-    let mut areas = BTreeMap::new();
-    let mut macros = BTreeMap::new();
-    let mut stack = Vec::new();
-    let mut nodes = Vec::new();
-    for k in 0..MACROS {
-        let v = welded[(k * 7919) % welded.len()];
-        let out = (v - centre).normalize_or_zero();
-        areas.insert(
-            format!("a{k}"),
-            Area::Region(vec![RegionShape {
-                shape: Shape::Sphere {
-                    radius: 0.08 * size,
-                },
-                transform: Transform::from_translation(v),
-            }]),
-        );
-        let points = (0..3)
-            .map(|j| {
-                let offset = Vec3::new(0.01 * j as f32, -0.008 * j as f32, 0.0) * size;
-                ControlPoint::basic(v + out * 0.05 * size + offset, 0.3, 0.8, 0.05 * size)
-            })
-            .collect();
-        macros.insert(
-            format!("f{k}"),
-            FfsdMacro {
-                label: format!("feature {k}"),
-                group: "Bench".to_owned(),
-                area: Some(format!("a{k}")),
-                points,
-                height: Some(HeightLimit::Above { theta: 0.85 }),
-                range: (-1.0, 1.0),
-            },
-        );
-        stack.push(LayerSpec {
-            influence: Some(InfluenceSpec {
-                area: Some(format!("a{k}")),
-                ..InfluenceSpec::default()
-            }),
-            ..LayerSpec::new(format!("m{k}"))
-        });
-        nodes.push(Node {
-            name: format!("m{k}"),
-            parent: Some("head".to_owned()),
-            transform: Transform::IDENTITY,
-            kind: NodeKind::Macro(MacroUse {
-                name: format!("f{k}"),
-                value: 0.0,
-            }),
-        });
+/// The scene file layout (version 1): the document's fields and `version`.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    #[allow(dead_code)]
+    version: u64,
+    #[serde(default)]
+    nodes: Vec<Node>,
+    #[serde(default)]
+    macros: BTreeMap<String, FfsdMacro>,
+}
+
+/// The identikit scene `scenes/identikit-head.ron`: the head with its macro tools, each on
+/// its own layer limited to a named area.
+fn identikit_document() -> Document {
+    let text = std::fs::read_to_string(SCENE).expect("scenes/identikit-head.ron");
+    let file: SceneFile = ron::from_str(&text).expect("a version 1 scene");
+    Document {
+        nodes: file.nodes,
+        macros: file.macros,
     }
-    nodes.insert(
-        0,
-        Node {
-            name: "head".to_owned(),
-            parent: None,
-            transform: Transform::IDENTITY,
-            kind: NodeKind::Mesh(MeshNode {
-                source: "lee-perry-smith-head.glb".to_owned(),
-                stack,
-                areas,
-            }),
-        },
-    );
-    Document { nodes, macros }
 }
 
 /// `n` steps: mostly macro slider values, some small macro tool moves, some layer toggles,
 /// as recorded by a history (deterministic pseudo-random choice).
+fn macro_nodes(doc: &Document) -> Vec<String> {
+    doc.nodes
+        .iter()
+        .filter(|n| matches!(n.kind, NodeKind::Macro(_)))
+        .map(|n| n.name.clone())
+        .collect()
+}
+
 fn mixed_history(base: &Document, n: usize) -> History {
+    let macros = macro_nodes(base);
+    let layers = base.mesh("head").expect("head").stack.len();
     let mut doc = base.clone();
     let mut history = History::new(base.clone());
     let mut seed = 0x2545_f491_u32;
@@ -145,17 +106,18 @@ fn mixed_history(base: &Document, n: usize) -> History {
         seed ^= seed << 13;
         seed ^= seed >> 17;
         seed ^= seed << 5;
-        let k = (seed >> 8) as usize % MACROS;
+        let k = (seed >> 8) as usize;
         let x = ((seed & 0xff) as f32 / 255.0) * 2.0 - 1.0;
-        let node = format!("m{k}");
+        let node = &macros[k % macros.len()];
         let op = match seed % 10 {
-            0..=5 => Operation::set_macro_value(&doc, &node, x),
+            0..=5 => Operation::set_macro_value(&doc, node, x),
             6..=8 => Operation::set_transform(
                 &doc,
-                &node,
+                node,
                 Transform::from_translation(Vec3::new(0.0, 0.0, 0.002 * x)),
             ),
             _ => {
+                let k = k % layers;
                 let enabled = doc.mesh("head").expect("head").stack[k].enabled;
                 Operation::set_layer_enabled(&doc, "head", k, !enabled)
             }
@@ -170,12 +132,13 @@ fn mixed_history(base: &Document, n: usize) -> History {
 
 /// A history of `n` slider steps on the head document.
 fn slider_history(base: &Document, n: usize) -> (Document, History) {
+    let macros = macro_nodes(base);
     let mut doc = base.clone();
     let mut history = History::new(base.clone());
     for step in 0..n {
-        let node = format!("m{}", step % MACROS);
+        let node = &macros[step % macros.len()];
         let v = (step % 200) as f32 / 100.0 - 1.0;
-        let op = Operation::set_macro_value(&doc, &node, v).expect("macro node");
+        let op = Operation::set_macro_value(&doc, node, v).expect("macro node");
         history
             .push(&mut doc, op, "", step as u64, None)
             .expect("accepted");
@@ -189,12 +152,13 @@ fn bench(c: &mut Criterion) {
         .build()
         .expect("thread pool");
     let rest = load_head();
-    let base = head_document(&rest);
+    let base = identikit_document();
     assert!(base.problems().is_empty(), "{:?}", base.problems());
     let history = mixed_history(&base, 10_000);
     eprintln!(
-        "head: {} welded vertices; history of {} steps",
+        "head: {} welded vertices, {} layers; history of {} steps",
         rest.welded_positions().len(),
+        base.mesh("head").expect("head").stack.len(),
         history.len()
     );
 

@@ -242,3 +242,73 @@ where
     }
     Ok(doc)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ductile_scene::prelude::*;
+
+    fn doc() -> Document {
+        Document {
+            nodes: vec![Node {
+                name: "g".into(),
+                parent: None,
+                transform: Transform::IDENTITY,
+                kind: NodeKind::Group,
+            }],
+            macros: Default::default(),
+        }
+    }
+
+    fn moved(doc: &Document, x: f32) -> Operation {
+        Operation::set_transform(doc, "g", Transform::from_translation(glam::Vec3::X * x)).unwrap()
+    }
+
+    #[test]
+    fn undo_of_a_document_that_was_changed_behind_the_history_is_refused() {
+        let mut d = doc();
+        let mut h = History::new(d.clone());
+        let op = moved(&d, 1.0);
+        h.push(&mut d, op, "move", 5, None).unwrap();
+        // Someone edits the document without the history.
+        d.nodes[0].transform = Transform::from_translation(glam::Vec3::Y);
+        let before = d.clone();
+        let err = h.undo(&mut d).unwrap_err();
+        assert!(
+            matches!(&err, HistoryError::AtStep { step: 1, label, source }
+                if label == "move" && matches!(**source, HistoryError::Stale { .. })),
+            "{err:?}"
+        );
+        assert_eq!(d, before);
+        assert_eq!(h.cursor(), 1);
+    }
+
+    #[test]
+    fn replay_reports_the_failing_step() {
+        let mut d = doc();
+        let mut h = History::new(d.clone());
+        let op = moved(&d, 1.0);
+        h.push(&mut d, op, "", 0, None).unwrap();
+        let op = moved(&d, 2.0);
+        h.push(&mut d, op, "", 0, None).unwrap();
+        let mut entries = h.entries().to_vec();
+        entries.remove(0);
+        let err = replay(h.base(), &entries, 1).unwrap_err();
+        assert!(
+            matches!(err, HistoryError::AtStep { step: 1, .. }),
+            "{err:?}"
+        );
+        assert!(matches!(
+            replay(h.base(), h.entries(), 3),
+            Err(HistoryError::NoSuchStep { step: 3, len: 2 })
+        ));
+        let mut seen = Vec::new();
+        let end = replay_with(h.base(), h.entries(), 2, |n, _| {
+            seen.push(n);
+            Ok::<(), HistoryError>(())
+        })
+        .unwrap();
+        assert_eq!(seen, [1, 2]);
+        assert_eq!(end, d);
+    }
+}

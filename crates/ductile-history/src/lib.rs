@@ -7,6 +7,8 @@
 //! evaluated meshes. The file format is documented in `docs/history-format.md`; reading and
 //! writing files is `ductile-io`'s job (this crate does no I/O and never reads the clock).
 
+#![warn(clippy::unwrap_used, clippy::expect_used)]
+
 mod check;
 pub mod edits;
 pub mod error;

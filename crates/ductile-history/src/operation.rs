@@ -872,3 +872,87 @@ fn remove_layer(doc: &mut Document, mesh: &str, index: usize, layer: &LayerSpec)
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn macro_value(node: &str, old: f32, new: f32) -> Operation {
+        Operation::SetMacroValue {
+            node: node.to_owned(),
+            old,
+            new,
+        }
+    }
+
+    #[test]
+    fn merge_keeps_the_first_old_and_the_last_new() {
+        let mut a = macro_value("m", 0.0, 0.2);
+        assert!(a.merge(&macro_value("m", 0.2, 0.5)));
+        assert_eq!(a, macro_value("m", 0.0, 0.5));
+    }
+
+    #[test]
+    fn merge_needs_the_same_target_and_continuity() {
+        let a = macro_value("m", 0.0, 0.2);
+        assert!(!a.can_merge(&macro_value("n", 0.2, 0.5)), "other node");
+        assert!(!a.can_merge(&macro_value("m", 0.3, 0.5)), "not continuous");
+        let weight = Operation::SetLayerWeight {
+            mesh: "m".into(),
+            index: 0,
+            old: 0.2,
+            new: 0.3,
+        };
+        assert!(!a.can_merge(&weight), "other kind of edit");
+        let mut other_layer = weight.clone();
+        if let Operation::SetLayerWeight { index, old, .. } = &mut other_layer {
+            *index = 1;
+            *old = 0.3;
+        }
+        assert!(!weight.can_merge(&other_layer));
+        // Additions are never merged.
+        let add = Operation::add_layer("m", 0, LayerSpec::new("t"));
+        assert!(!add.can_merge(&add));
+    }
+
+    #[test]
+    fn groups_merge_member_by_member() {
+        let group = |x: f32, y: f32| Operation::Group {
+            label: "drag two".into(),
+            ops: vec![macro_value("a", x, y), macro_value("b", -x, -y)],
+        };
+        let mut g = group(0.0, 0.1);
+        assert!(g.merge(&group(0.1, 0.4)));
+        assert_eq!(g, group(0.0, 0.4));
+        let shorter = Operation::Group {
+            label: "one".into(),
+            ops: vec![macro_value("a", 0.4, 0.5)],
+        };
+        assert!(!g.can_merge(&shorter));
+    }
+
+    #[test]
+    fn inverse_of_a_group_reverses_its_members() {
+        let g = Operation::Group {
+            label: "g".into(),
+            ops: vec![macro_value("a", 0.0, 1.0), Operation::move_layer("m", 0, 2)],
+        };
+        let Operation::Group { ops, .. } = g.inverse() else {
+            panic!("a group's inverse is a group")
+        };
+        assert_eq!(
+            ops,
+            vec![Operation::move_layer("m", 2, 0), macro_value("a", 1.0, 0.0)]
+        );
+        assert_eq!(g.elementary_count(), 2);
+    }
+
+    #[test]
+    fn operations_read_as_ron() {
+        let text = "SetLayerEnabled(mesh: \"head\", index: 3, old: true, new: false)";
+        let op: Operation = ron::from_str(text).unwrap();
+        assert_eq!(op.describe(), "disable layer 3 of 'head'");
+        let unknown = "SetLayerEnabled(mesh: \"head\", index: 3, old: true, new: false, x: 1)";
+        assert!(ron::from_str::<Operation>(unknown).is_err());
+    }
+}

@@ -107,7 +107,11 @@ fn make(doc: &Document, c: &Choice, step: usize) -> Option<Operation> {
         11 => Operation::reparent(
             doc,
             pick(&all, c.a)?,
-            if c.b % 4 == 0 { None } else { pick(&all, c.b) },
+            if c.b.is_multiple_of(4) {
+                None
+            } else {
+                pick(&all, c.b)
+            },
         )
         .ok()?,
         12 => {
@@ -121,17 +125,22 @@ fn make(doc: &Document, c: &Choice, step: usize) -> Option<Operation> {
             .ok()?,
         14 => {
             let m = doc.mesh(mesh?).ok()?;
-            let inf = (c.b % 3 != 0).then(|| InfluenceSpec {
+            let inf = (!c.b.is_multiple_of(3)).then(|| InfluenceSpec {
                 volumes: pick(&volumes, c.b).map(str::to_owned).into_iter().collect(),
-                area: m.areas.keys().next().filter(|_| c.b % 2 == 0).cloned(),
+                area: m
+                    .areas
+                    .keys()
+                    .next()
+                    .filter(|_| c.b.is_multiple_of(2))
+                    .cloned(),
                 inner: x.abs() * 0.9,
-                invert: c.b % 5 == 0,
+                invert: c.b.is_multiple_of(5),
                 ..InfluenceSpec::default()
             });
             Operation::set_layer_influence(doc, mesh?, layer?, inf).ok()?
         }
         15 => {
-            let area = (c.b % 3 != 0).then(|| {
+            let area = (!c.b.is_multiple_of(3)).then(|| {
                 Area::Region(vec![RegionShape {
                     shape: Shape::Box {
                         half_extents: Vec3::splat(x.abs() + 0.2),
@@ -143,7 +152,7 @@ fn make(doc: &Document, c: &Choice, step: usize) -> Option<Operation> {
         }
         16 => {
             let name = ["bump", "dent"][c.a % 2];
-            let def = (c.b % 4 != 0).then(|| FfsdMacro {
+            let def = (!c.b.is_multiple_of(4)).then(|| FfsdMacro {
                 label: name.to_owned(),
                 group: String::new(),
                 area: None,

@@ -182,6 +182,53 @@ pub enum IoError {
         /// What is wrong.
         problem: String,
     },
+    /// A history file has no `version` field.
+    #[error(
+        "{}: the history file has no `version` field (supported versions: {})",
+        path.display(),
+        list(crate::history_file::SUPPORTED_HISTORY_VERSIONS)
+    )]
+    MissingHistoryVersion {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A history file has a version this build cannot read.
+    #[error(
+        "{}: history format version {found} is not supported (supported versions: {})",
+        path.display(),
+        list(crate::history_file::SUPPORTED_HISTORY_VERSIONS)
+    )]
+    UnsupportedHistoryVersion {
+        /// The file.
+        path: PathBuf,
+        /// The version found.
+        found: u64,
+    },
+    /// The scene a history file refers to as its base is not the one the history was
+    /// recorded on (its document's hash differs).
+    #[error(
+        "{}: the base scene {} does not match this history (its document hash is {found}, the history was recorded on {expected}); the scene was changed after the history was saved",
+        path.display(),
+        scene.display()
+    )]
+    BaseMismatch {
+        /// The history file.
+        path: PathBuf,
+        /// The referenced scene file.
+        scene: PathBuf,
+        /// The hash recorded in the history.
+        expected: String,
+        /// The hash of the scene's document now.
+        found: String,
+    },
+    /// A step of a history cannot be applied (or a step asked for does not exist).
+    #[error("{}: {source}", path.display())]
+    History {
+        /// The history file.
+        path: PathBuf,
+        /// The history's error (it names the step).
+        source: ductile_history::error::HistoryError,
+    },
 }
 
 /// The scene format versions this build reads.

@@ -4,13 +4,16 @@
 //!   with a migration step for old versions;
 //! * [`mesh`]: mesh import from glTF (`.glb`, `.gltf`) and OBJ, with an optional `#name`
 //!   selection of one part ([`load_mesh`], [`MeshRef`]);
-//! * [`export`]: glTF 2.0 export ([`export_gltf`]).
+//! * [`export`]: glTF 2.0 export ([`export_gltf`]);
+//! * [`history_file`]: versioned RON edit histories with an inline or hashed base scene
+//!   ([`read_history`], [`save_history`]).
 //!
 //! Every error is an [`IoError`] naming the file (and the scene node). Every file is written
 //! atomically ([`write_atomic`]): a failed write never leaves a half-written file.
 
 pub mod error;
 pub mod export;
+pub mod history_file;
 pub mod mesh;
 pub mod scene;
 
@@ -19,6 +22,10 @@ use std::path::Path;
 
 pub use error::{IoError, Result, report};
 pub use export::{ExportMesh, export_gltf};
+pub use history_file::{
+    Base, LoadedHistory, SaveBase, document_hash, is_history_file, is_history_text, read_history,
+    save_history,
+};
 pub use mesh::{MeshRef, load_mesh, load_rest_mesh};
 pub use scene::{
     LoadedMesh, LoadedScene, check_scene, load_scene, parse_scene, read_scene, save_scene,

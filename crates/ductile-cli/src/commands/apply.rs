@@ -1,4 +1,5 @@
-//! `ductile apply SCENE [-o OUT]`: evaluate every mesh's stack and export glTF.
+//! `ductile apply SCENE [-o OUT]`: evaluate every mesh's stack and export glTF. `SCENE` may
+//! also be a history file.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -10,7 +11,7 @@ use ductile_io::ExportMesh;
 /// Arguments of `ductile apply`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The scene file (RON).
+    /// The scene file (RON), or a history file (replayed to the step it was saved at).
     pub scene: PathBuf,
     /// Output file, `.glb` or `.gltf` (default: `<scene stem>.glb` in the current directory).
     #[arg(short, long)]

@@ -3,7 +3,9 @@
 pub mod apply;
 pub mod bench;
 pub mod check;
+pub mod history;
 pub mod info;
+pub mod replay;
 
 use std::path::Path;
 
@@ -13,9 +15,27 @@ use ductile_io::LoadedScene;
 /// Loads the scene a command works on, with every mesh.
 ///
 /// This is the one place that decides what kind of input file a scene-consuming command
-/// accepts; a history file (replayed to its final document) is to be dispatched here by
-/// extension.
+/// accepts: a scene file, or a history file (recognised by its content: a top-level
+/// `entries` field), which is replayed to the step it was saved at, every step checked.
 pub fn load_input(path: &Path) -> anyhow::Result<LoadedScene> {
+    if ductile_io::is_history_file(path) {
+        let loaded = ductile_io::read_history(path)
+            .with_context(|| format!("cannot load history {}", path.display()))?;
+        let document = loaded
+            .replay(loaded.cursor)
+            .with_context(|| format!("cannot replay history {}", path.display()))?;
+        let problems = document.problems();
+        if !problems.is_empty() {
+            return Err(ductile_io::IoError::Scene {
+                path: path.to_owned(),
+                problems,
+            })
+            .with_context(|| format!("cannot load history {}", path.display()));
+        }
+        return loaded
+            .scene(document)
+            .with_context(|| format!("cannot load history {}", path.display()));
+    }
     ductile_io::load_scene(path).with_context(|| format!("cannot load scene {}", path.display()))
 }
 
