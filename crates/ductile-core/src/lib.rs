@@ -15,6 +15,7 @@ pub mod ffsd;
 pub mod influence;
 pub mod mesh;
 pub mod normals;
+pub mod refinement;
 pub mod sketch;
 pub mod stack;
 pub mod tool;

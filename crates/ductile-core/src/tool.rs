@@ -17,6 +17,8 @@ use serde::{Deserialize, Serialize};
 use crate::error::Result;
 use crate::ffsd::{FfsdBind, FfsdTool};
 use crate::mesh::Topology;
+use crate::refinement::WholeDeform;
+use crate::sketch::tool::{SketchBind, SketchTool};
 
 /// What a tool sees when it binds: the layer's input.
 #[derive(Debug, Clone, Copy)]
@@ -60,6 +62,8 @@ pub trait Deformer {
 pub enum Tool {
     /// FFSD control points (Yoshizawa et al. 2002; Martínek & Kolingerová 2014).
     Ffsd(FfsdTool),
+    /// Sketch-based bending and twisting (Kho & Garland 2005).
+    Sketch(Box<SketchTool>),
 }
 
 /// The bind of a [`Tool`].
@@ -67,6 +71,8 @@ pub enum Tool {
 pub enum ToolBind {
     /// Bind of [`Tool::Ffsd`].
     Ffsd(FfsdBind),
+    /// Bind of [`Tool::Sketch`].
+    Sketch(Box<SketchBind>),
 }
 
 impl Tool {
@@ -75,6 +81,7 @@ impl Tool {
     pub fn kind_name(&self) -> &'static str {
         match self {
             Tool::Ffsd(_) => "FFSD control points",
+            Tool::Sketch(_) => "sketch deformation",
         }
     }
 
@@ -82,6 +89,7 @@ impl Tool {
     pub fn validate(&self, what: &str) -> Result<()> {
         match self {
             Tool::Ffsd(t) => t.validate(what),
+            Tool::Sketch(t) => t.validate(what),
         }
     }
 
@@ -89,6 +97,7 @@ impl Tool {
     pub fn bind(&self, input: &BindInput<'_>) -> Result<ToolBind> {
         Ok(match self {
             Tool::Ffsd(t) => ToolBind::Ffsd(t.bind(input)?),
+            Tool::Sketch(t) => ToolBind::Sketch(Box::new(t.bind(input)?)),
         })
     }
 
@@ -97,6 +106,7 @@ impl Tool {
     pub fn deform(&self, bind: &ToolBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
         match (self, bind) {
             (Tool::Ffsd(t), ToolBind::Ffsd(b)) => t.deform(b, positions, active, out),
+            (Tool::Sketch(t), ToolBind::Sketch(b)) => t.deform(b, positions, active, out),
             #[allow(unreachable_patterns)]
             _ => {
                 for (o, &i) in out.iter_mut().zip(active) {
@@ -106,11 +116,30 @@ impl Tool {
         }
     }
 
+    /// Evaluates a tool that works on the layer as a whole (a linear solve, a topology
+    /// change) rather than vertex by vertex: the deformed position of every vertex of the
+    /// active set the bind was made for (in its order) and, when `refine` is true, the
+    /// tool's refinement.
+    /// `None` for per-vertex tools, which the stack deforms in chunks with
+    /// [`Tool::deform`].
+    pub fn deform_whole(
+        &self,
+        bind: &ToolBind,
+        positions: &[Vec3],
+        refine: bool,
+    ) -> Option<Result<WholeDeform>> {
+        match (self, bind) {
+            (Tool::Sketch(t), ToolBind::Sketch(b)) => Some(t.evaluate(b, positions, refine)),
+            _ => None,
+        }
+    }
+
     /// See [`Deformer::transformed`].
     #[must_use]
     pub fn transformed(&self, m: &Affine3A) -> Self {
         match self {
             Tool::Ffsd(t) => Tool::Ffsd(t.transformed(m)),
+            Tool::Sketch(t) => Tool::Sketch(Box::new(t.transformed(m))),
         }
     }
 
@@ -119,6 +148,7 @@ impl Tool {
     pub fn same_rest_state(&self, other: &Self) -> bool {
         match (self, other) {
             (Tool::Ffsd(a), Tool::Ffsd(b)) => a.same_rest_state(b),
+            (Tool::Sketch(a), Tool::Sketch(b)) => a.same_rest_state(b),
             #[allow(unreachable_patterns)]
             _ => false,
         }
