@@ -91,10 +91,10 @@ fn layer(rest: &RestMesh, bend: f32) -> Layer {
     Layer::new(
         "sketch",
         Tool::Sketch(Box::new(SketchTool {
-            partition: Partition {
+            partition: Some(Partition {
                 roi,
                 rigid: vec![rigid],
-            },
+            }),
             reference: Curve::Points(reference),
             normal: Some(Vec3::Z),
             mode: SketchMode::Bend {

@@ -88,6 +88,64 @@ pub enum CoreError {
         /// Vertex count.
         vertices: usize,
     },
+    /// A sketch stroke has too few usable points (after filtering and merging short segments).
+    #[error("{what}: the stroke has {found} usable points, at least {needed} are needed")]
+    StrokeTooShort {
+        /// Which stroke.
+        what: String,
+        /// Points left.
+        found: usize,
+        /// Points needed.
+        needed: usize,
+    },
+    /// No point of a sketch stroke hits the mesh, so the stroke cannot be placed in 3-D.
+    #[error("{what}: none of the {points} stroke points hits the mesh")]
+    StrokeMissesMesh {
+        /// Which stroke.
+        what: String,
+        /// Number of stroke points tried.
+        points: usize,
+    },
+    /// A stroke point cannot be projected (its ray is parallel to the sketch plane or the
+    /// plane is behind the eye).
+    #[error("{what}: stroke point {index} cannot be projected onto the sketch plane: {problem}")]
+    StrokeProjection {
+        /// Which stroke.
+        what: String,
+        /// Stroke point index (0-based).
+        index: usize,
+        /// What went wrong.
+        problem: String,
+    },
+    /// Twisting needs a front and a back hit for every node of the reference curve
+    /// (Kho & Garland §5.2); the ray through this node hits the mesh only once (or never).
+    #[error(
+        "{what}: the ray through curve node {node} hits the mesh {hits} time(s); twisting needs a front and a back hit"
+    )]
+    SingleHit {
+        /// Which curve.
+        what: String,
+        /// Curve node index (0-based).
+        node: usize,
+        /// Number of distinct hits found.
+        hits: usize,
+    },
+    /// The region of interest of a sketch deformation could not be recognised.
+    #[error("{what}: {problem}")]
+    RegionOfInterest {
+        /// Which curve or cutting plane.
+        what: String,
+        /// What went wrong.
+        problem: String,
+    },
+    /// An interactive cut (Kho & Garland §4.2.1) failed.
+    #[error("{what}: {problem}")]
+    Cut {
+        /// Which cut.
+        what: String,
+        /// What went wrong.
+        problem: String,
+    },
 }
 
 /// Shorthand for results in this crate.

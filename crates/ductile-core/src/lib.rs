@@ -9,10 +9,14 @@
 
 #![warn(clippy::unwrap_used, clippy::expect_used)]
 
+pub mod axial;
 pub mod basis;
+pub mod curve;
 pub mod error;
 pub mod ffsd;
+pub mod frames;
 pub mod influence;
+pub mod lattice;
 pub mod mesh;
 pub mod normals;
 pub mod refinement;
@@ -22,6 +26,8 @@ pub mod tool;
 
 /// The types most users need.
 pub mod prelude {
+    pub use crate::axial::{AxialTool, AxisPoint, AxisShape};
+    pub use crate::curve::{CurveBasis, CurveTool};
     pub use crate::error::{CoreError, Result};
     pub use crate::ffsd::{ControlPoint, FfsdMacro, FfsdTool, HeightLimit, PointMode};
     pub use crate::influence::{Falloff, Influence, Mask, Shape, Volume};

@@ -14,8 +14,11 @@
 use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Serialize};
 
+use crate::axial::{AxialBind, AxialTool};
+use crate::curve::{CurveBind, CurveTool};
 use crate::error::Result;
 use crate::ffsd::{FfsdBind, FfsdTool};
+use crate::lattice::{LatticeTool, PreparedLattice};
 use crate::mesh::Topology;
 use crate::refinement::WholeDeform;
 use crate::sketch::tool::{SketchBind, SketchTool};
@@ -64,6 +67,12 @@ pub enum Tool {
     Ffsd(FfsdTool),
     /// Sketch-based bending and twisting (Kho & Garland 2005).
     Sketch(Box<SketchTool>),
+    /// Axial deformation AxDf (Lazarus et al. 1994; Bechmann's survey §4.1).
+    Axial(AxialTool),
+    /// Curve deformation by De Casteljau / De Boor (Chang & Rockwood 1994; survey §4.2).
+    Curve(CurveTool),
+    /// Lattice FFD: Bernstein (Sederberg–Parry), B-spline and rational lattices.
+    Lattice(LatticeTool),
 }
 
 /// The bind of a [`Tool`].
@@ -73,6 +82,12 @@ pub enum ToolBind {
     Ffsd(FfsdBind),
     /// Bind of [`Tool::Sketch`].
     Sketch(Box<SketchBind>),
+    /// Bind of [`Tool::Axial`].
+    Axial(AxialBind),
+    /// Bind of [`Tool::Curve`].
+    Curve(CurveBind),
+    /// Bind of [`Tool::Lattice`].
+    Lattice(Box<PreparedLattice>),
 }
 
 impl Tool {
@@ -82,6 +97,9 @@ impl Tool {
         match self {
             Tool::Ffsd(_) => "FFSD control points",
             Tool::Sketch(_) => "sketch deformation",
+            Tool::Axial(_) => "axial deformation",
+            Tool::Curve(_) => "curve deformation",
+            Tool::Lattice(_) => "lattice FFD",
         }
     }
 
@@ -90,6 +108,9 @@ impl Tool {
         match self {
             Tool::Ffsd(t) => t.validate(what),
             Tool::Sketch(t) => t.validate(what),
+            Tool::Axial(t) => t.validate(what),
+            Tool::Curve(t) => t.validate(what),
+            Tool::Lattice(t) => t.validate(what),
         }
     }
 
@@ -98,6 +119,9 @@ impl Tool {
         Ok(match self {
             Tool::Ffsd(t) => ToolBind::Ffsd(t.bind(input)?),
             Tool::Sketch(t) => ToolBind::Sketch(Box::new(t.bind(input)?)),
+            Tool::Axial(t) => ToolBind::Axial(t.bind(input)?),
+            Tool::Curve(t) => ToolBind::Curve(t.bind(input)?),
+            Tool::Lattice(t) => ToolBind::Lattice(Box::new(t.bind(input)?)),
         })
     }
 
@@ -107,6 +131,9 @@ impl Tool {
         match (self, bind) {
             (Tool::Ffsd(t), ToolBind::Ffsd(b)) => t.deform(b, positions, active, out),
             (Tool::Sketch(t), ToolBind::Sketch(b)) => t.deform(b, positions, active, out),
+            (Tool::Axial(t), ToolBind::Axial(b)) => t.deform(b, positions, active, out),
+            (Tool::Curve(t), ToolBind::Curve(b)) => t.deform(b, positions, active, out),
+            (Tool::Lattice(t), ToolBind::Lattice(b)) => t.deform(b, positions, active, out),
             #[allow(unreachable_patterns)]
             _ => {
                 for (o, &i) in out.iter_mut().zip(active) {
@@ -140,6 +167,9 @@ impl Tool {
         match self {
             Tool::Ffsd(t) => Tool::Ffsd(t.transformed(m)),
             Tool::Sketch(t) => Tool::Sketch(Box::new(t.transformed(m))),
+            Tool::Axial(t) => Tool::Axial(t.transformed(m)),
+            Tool::Curve(t) => Tool::Curve(t.transformed(m)),
+            Tool::Lattice(t) => Tool::Lattice(t.transformed(m)),
         }
     }
 
@@ -149,6 +179,9 @@ impl Tool {
         match (self, other) {
             (Tool::Ffsd(a), Tool::Ffsd(b)) => a.same_rest_state(b),
             (Tool::Sketch(a), Tool::Sketch(b)) => a.same_rest_state(b),
+            (Tool::Axial(a), Tool::Axial(b)) => a.same_rest_state(b),
+            (Tool::Curve(a), Tool::Curve(b)) => a.same_rest_state(b),
+            (Tool::Lattice(a), Tool::Lattice(b)) => a.same_rest_state(b),
             #[allow(unreachable_patterns)]
             _ => false,
         }

@@ -3,9 +3,13 @@
 
 pub mod bend;
 pub mod camera;
+pub mod cut;
 pub mod partition;
+pub mod raycast;
 pub mod refine;
+pub mod roi;
 pub mod skin;
 pub mod smooth;
+pub mod stroke;
 pub mod tool;
 pub mod twist;

@@ -22,11 +22,14 @@ use crate::basis::KnotVector;
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
 use crate::refinement::{LayerRefinement, SplitMesh, WholeDeform};
 use crate::sketch::bend::{Bend, TurningCurve, bend_point, rebuild};
-use crate::sketch::camera::{Camera, Ray};
+use crate::sketch::camera::Camera;
 use crate::sketch::partition::Partition;
+use crate::sketch::raycast::Bvh;
 use crate::sketch::refine::{RefineOptions, Vertices, refine};
+use crate::sketch::roi::partition_from_curve;
 use crate::sketch::skin::{Polyline, skin, virtual_vertex};
 use crate::sketch::smooth::Smoother;
+use crate::sketch::stroke::{filter_stroke, joint_curve, project_stroke, project_target_stroke};
 use crate::sketch::twist::{Axis, twist_point};
 use crate::tool::{BindInput, Deformer};
 
@@ -229,8 +232,10 @@ pub enum SketchMode {
 #[serde(deny_unknown_fields)]
 pub struct SketchTool {
     /// Region of interest and rigid components (welded indices of the mesh the layer
-    /// binds on).
-    pub partition: Partition,
+    /// binds on); `None` computes them at bind time from the cutting planes at the ends of
+    /// the reference curve (§4.2, `sketch::roi`).
+    #[serde(default)]
+    pub partition: Option<Partition>,
     /// The reference curve (a skeleton of the region).
     pub reference: Curve,
     /// Unit normal of the sketch plane, the bending axis; `None` takes the direction towards
@@ -397,7 +402,11 @@ impl SketchTool {
                 let start = bind.reference.points()[0];
                 let points = match target {
                     Curve::Points(p) => p.clone(),
-                    Curve::Stroke(s) => project_on_plane(s, start, bind.normal, "target stroke")?,
+                    Curve::Stroke(s) => project_target_stroke(
+                        &s.camera,
+                        &filter_stroke(&s.pixels)?,
+                        bind.reference.points(),
+                    )?,
                     Curve::Joints(_) => {
                         return Err(CoreError::Degenerate {
                             what: what.to_owned(),
@@ -577,12 +586,33 @@ impl Deformer for SketchTool {
         let what = "sketch tool";
         let positions = input.positions;
         let n = positions.len();
+        let topology = input.topology;
         let reference_points = match &self.reference {
             Curve::Points(p) => p.clone(),
-            Curve::Stroke(s) => project_stroke(s, positions, &input.topology.triangles)?,
-            Curve::Joints(s) => joint_curve(s, positions, &input.topology.triangles)?,
+            Curve::Stroke(s) => {
+                let bvh = Bvh::build(positions, &topology.triangles)?;
+                project_stroke(
+                    &s.camera,
+                    &filter_stroke(&s.pixels)?,
+                    positions,
+                    topology,
+                    &bvh,
+                )?
+            }
+            Curve::Joints(s) => {
+                let bvh = Bvh::build(positions, &topology.triangles)?;
+                joint_curve(&s.camera, &filter_stroke(&s.pixels)?, &bvh)?
+            }
         };
         let reference = Polyline::new(&reference_points, "reference curve")?;
+        let computed;
+        let partition = match &self.partition {
+            Some(p) => p,
+            None => {
+                computed = partition_from_curve(positions, topology, reference.points())?;
+                &computed
+            }
+        };
 
         // Roles, restricted to the active set.
         let mut role = vec![STATIC; n];
@@ -602,7 +632,7 @@ impl Deformer for SketchTool {
             }
         };
         let mut roi = Vec::new();
-        for &v in &self.partition.roi {
+        for &v in &partition.roi {
             check(v, "region of interest")?;
             if slot_of[v as usize] != u32::MAX && role[v as usize] == STATIC {
                 role[v as usize] = ROI;
@@ -610,7 +640,7 @@ impl Deformer for SketchTool {
             }
         }
         let mut rigid = Vec::new();
-        for (c, comp) in self.partition.rigid.iter().enumerate() {
+        for (c, comp) in partition.rigid.iter().enumerate() {
             let mut vertices = Vec::new();
             for &v in comp {
                 check(v, &format!("rigid component {c}"))?;
@@ -737,105 +767,6 @@ impl Deformer for SketchTool {
     }
 }
 
-/// Intersects a ray with the plane through `point` with unit normal `n`.
-fn ray_plane(ray: &Ray, point: Vec3, n: Vec3) -> Option<Vec3> {
-    let denom = ray.direction.dot(n);
-    if denom.abs() < 1e-12 {
-        return None;
-    }
-    let t = (point - ray.origin).dot(n) / denom;
-    Some(ray.origin + ray.direction * t)
-}
-
-/// Projects a stroke onto the plane through `point` with unit normal `n` (§4.1).
-fn project_on_plane(s: &Stroke, point: Vec3, n: Vec3, what: &str) -> Result<Vec<Vec3>> {
-    s.pixels
-        .iter()
-        .enumerate()
-        .map(|(i, &px)| {
-            ray_plane(&s.camera.ray(px), point, n).ok_or_else(|| CoreError::Degenerate {
-                what: what.to_owned(),
-                problem: format!("the ray of pixel {i} is parallel to the sketch plane"),
-            })
-        })
-        .collect()
-}
-
-/// Sorted ray parameters of every hit of `ray` with the triangles (Möller–Trumbore).
-// TODO(sketch-roi): replace by the BVH ray caster of `sketch/raycast.rs` once merged.
-fn ray_hits(ray: &Ray, positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<f32> {
-    let mut hits: Vec<f32> = triangles
-        .iter()
-        .filter_map(|t| {
-            let (a, b, c) = (
-                positions[t[0] as usize],
-                positions[t[1] as usize],
-                positions[t[2] as usize],
-            );
-            let (e1, e2) = (b - a, c - a);
-            let p = ray.direction.cross(e2);
-            let det = e1.dot(p);
-            if det.abs() < 1e-12 {
-                return None;
-            }
-            let inv = 1.0 / det;
-            let s = ray.origin - a;
-            let u = s.dot(p) * inv;
-            let q = s.cross(e1);
-            let v = ray.direction.dot(q) * inv;
-            let t = e2.dot(q) * inv;
-            (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t >= 0.0).then_some(t)
-        })
-        .collect();
-    hits.sort_by(f32::total_cmp);
-    hits
-}
-
-/// Projects a reference stroke (§4.1): the first pixel's ray hits the mesh at `p₀`; every
-/// pixel's ray meets the view-parallel plane through `p₀`.
-fn project_stroke(s: &Stroke, positions: &[Vec3], triangles: &[[u32; 3]]) -> Result<Vec<Vec3>> {
-    let what = "reference stroke";
-    let first = s.pixels[0];
-    let ray = s.camera.ray(first);
-    let t = ray_hits(&ray, positions, triangles)
-        .first()
-        .copied()
-        .ok_or_else(|| CoreError::Degenerate {
-            what: what.to_owned(),
-            problem: format!(
-                "the first point ({}, {}) does not hit the mesh",
-                first.x, first.y
-            ),
-        })?;
-    let p0 = ray.origin + ray.direction * t;
-    project_on_plane(s, p0, -s.camera.forward(), what)
-}
-
-/// The joint curve of a stroke (§5.2): the midpoint of the first two hits of every node's
-/// ray; an error when a node has fewer than two hits (twisting is disallowed there).
-fn joint_curve(s: &Stroke, positions: &[Vec3], triangles: &[[u32; 3]]) -> Result<Vec<Vec3>> {
-    s.pixels
-        .iter()
-        .enumerate()
-        .map(|(i, &px)| {
-            let ray = s.camera.ray(px);
-            let hits = ray_hits(&ray, positions, triangles);
-            if hits.len() < 2 {
-                return Err(CoreError::Degenerate {
-                    what: "joint curve".into(),
-                    problem: format!(
-                        "stroke node {i} at ({}, {}) hits the mesh {} time(s); twisting needs a front and a back hit",
-                        px.x,
-                        px.y,
-                        hits.len()
-                    ),
-                });
-            }
-            Ok(ray.origin + ray.direction * (0.5 * (hits[0] + hits[1])))
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use std::f32::consts::{FRAC_PI_2, PI};
@@ -924,7 +855,7 @@ mod tests {
 
     fn bend_tool(rest: &RestMesh, smooth: bool) -> SketchTool {
         SketchTool {
-            partition: partition(rest),
+            partition: Some(partition(rest)),
             reference: axis_reference(),
             normal: Some(Vec3::Z),
             mode: SketchMode::Bend {
@@ -1174,11 +1105,43 @@ mod tests {
             },
             ..bend_tool(&rest, false)
         };
-        let from_strokes = run(&rest, tool);
+        let from_strokes = run(&rest, tool.clone());
+        // Without a stored partition the region comes from the cutting planes at the
+        // reference's ends (§4.2): the same U, static part untouched.
+        let auto = run(
+            &rest,
+            SketchTool {
+                partition: None,
+                ..tool
+            },
+        );
+        for (i, p) in rest.welded_positions().iter().enumerate() {
+            if p.x < ROI.0 - 1e-3 {
+                assert_eq!(*p, auto[i]);
+            } else if p.x > ROI.1 + STEP {
+                assert!(
+                    auto[i].distance(from_strokes[i]) < 0.05,
+                    "{p}: {} vs {}",
+                    auto[i],
+                    from_strokes[i]
+                );
+            }
+        }
+        // The tool filters recorded strokes (§4.1); with an orthographic camera filtering
+        // pixels is filtering the plane points they come from.
+        let filtered =
+            crate::sketch::stroke::filter_stroke(&stroke(&u_target(RADIUS)).pixels).unwrap();
+        let target: Vec<Vec3> = filtered
+            .iter()
+            .map(|&p| {
+                let ray = camera.ray(p);
+                ray.origin + ray.direction * ((RADIUS - ray.origin.z) / ray.direction.z)
+            })
+            .collect();
         let tool = SketchTool {
             reference: Curve::Points(ref_pts.to_vec()),
             mode: SketchMode::Bend {
-                target: Curve::Points(u_target(RADIUS)),
+                target: Curve::Points(target),
                 turning: None,
             },
             ..bend_tool(&rest, false)
@@ -1295,10 +1258,10 @@ mod tests {
             viewport: Vec2::new(800.0, 600.0),
         };
         let tool = Tool::Sketch(Box::new(SketchTool {
-            partition: Partition {
+            partition: Some(Partition {
                 roi: vec![1, 2, 3],
                 rigid: vec![vec![4, 5]],
-            },
+            }),
             reference: Curve::Stroke(Stroke {
                 pixels: vec![Vec2::new(10.0, 20.0), Vec2::new(30.0, 40.0)],
                 camera,
@@ -1317,7 +1280,7 @@ mod tests {
         assert_eq!(back, tool);
         // Defaults: smoothing on, no refinement, no controls.
         let short: SketchTool = ron::from_str(
-            "(partition: (roi: [0], rigid: []), reference: Points([(0,0,0),(1,0,0)]), normal: Some((0,0,1)), mode: Twist(angle: 1.0))",
+            "(partition: Some((roi: [0], rigid: [])), reference: Points([(0,0,0),(1,0,0)]), normal: Some((0,0,1)), mode: Twist(angle: 1.0))",
         )
         .unwrap();
         assert!(short.smooth && short.refine.is_none() && short.scale.is_none());
@@ -1330,7 +1293,7 @@ mod tests {
         t.normal = None;
         assert!(t.validate("t").is_err(), "3-D reference without a normal");
         let mut t = bend_tool(&rest, true);
-        t.partition.roi.push(1_000_000);
+        t.partition.as_mut().unwrap().roi.push(1_000_000);
         let err = Stack {
             layers: vec![Layer::new("s", Tool::Sketch(Box::new(t)))],
         }

@@ -1,0 +1,735 @@
+//! Axial deformation (AxDf, Lazarus, Coquillart & Jancène 1994) as described in Bechmann's
+//! survey "Multidimensional free-form deformation tools" §4.1;
+//! `docs/algorithms/axial.md` has the decisions taken where the survey is loose.
+//!
+//! A point `U` is attached at bind time to its closest point `A_U` on the rest axis, with
+//! the rotation-minimising frame `R₁` there ([`crate::frames`]), the twist `W₁` (rotation by
+//! `q₁` about the tangent) and the scale `S₁` (factor `θ₁` on the two coordinates across the
+//! axis). Its local coordinates are `l = (T₁ R₁ W₁ S₁)⁻¹ U`. The deformed point is
+//!
+//! `D(U) = T₂ R₂ W₂ S₂ l = A'_U + R₂ W₂ S₂ S₁⁻¹ W₁⁻¹ R₁ᵀ (U − A_U)`
+//!
+//! (the survey's `T₂S₂W₂R₂(T₁S₁W₁R₁)⁻¹U`, with `W` and `S` acting in the local frame, where
+//! they commute). `A'_U` is the point with the same axis parameter on the deformed axis.
+//! The zone of influence is the generalised cylinder of radius `r` around the rest axis:
+//! with `d = |U − A_U|`, the point moves by `w · (D(U) − U)`, `w = falloff(d / r)`, and
+//! keeps its position exactly where `d ≥ r`.
+
+use glam::{Affine3A, Mat3, Quat, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::curve::{CurveBasis, CurveEvaluator, validate_polygon};
+use crate::error::{CoreError, Result, check_finite};
+use crate::frames::{Frame, PolylineIndex, double_reflection, polyline_tangents};
+use crate::influence::Falloff;
+use crate::tool::{BindInput, Deformer, uniform_scale};
+
+/// Samples per control point of a spline axis.
+const SAMPLES_PER_POINT: usize = 16;
+
+/// How the axis runs through its points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum AxisShape {
+    /// Straight segments between the points.
+    #[default]
+    Polyline,
+    /// A Bézier curve with the points as control polygon.
+    Bezier,
+    /// A clamped uniform B-spline of the given degree with the points as control polygon.
+    BSpline {
+        /// The degree `p` (1..=15, less than the number of points).
+        degree: usize,
+    },
+}
+
+/// One axis point of a state: position, twist `q` and scale `θ`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisPoint {
+    /// Position (mesh space).
+    pub position: Vec3,
+    /// Twist angle `q` about the axis tangent, radians (right-hand rule), default 0.
+    #[serde(default)]
+    pub twist: f32,
+    /// Scale `θ > 0` across the axis, default 1.
+    #[serde(default = "one")]
+    pub scale: f32,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+impl AxisPoint {
+    /// A point without twist and with unit scale.
+    #[must_use]
+    pub fn at(position: Vec3) -> Self {
+        Self {
+            position,
+            twist: 0.0,
+            scale: 1.0,
+        }
+    }
+}
+
+/// The AxDf tool: an axis with a rest and a deformed state and its zone of influence.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxialTool {
+    /// Polyline or spline through the points.
+    #[serde(default)]
+    pub shape: AxisShape,
+    /// Rest state of the axis (at least 2 points, no two consecutive ones equal).
+    pub rest: Vec<AxisPoint>,
+    /// Deformed state, as many points as `rest`.
+    pub deformed: Vec<AxisPoint>,
+    /// Radius `r > 0` of the generalised cylinder around the rest axis (mesh units).
+    pub radius: f32,
+    /// Falloff of the weight from the axis to the cylinder's surface.
+    #[serde(default)]
+    pub falloff: Falloff,
+    /// Normalised distance up to which the weight stays 1, in `[0, 1)`.
+    #[serde(default)]
+    pub inner: f32,
+}
+
+impl AxialTool {
+    /// A polyline tool whose deformed state equals its rest state (the identity).
+    #[must_use]
+    pub fn new(rest: Vec<AxisPoint>, radius: f32) -> Self {
+        Self {
+            shape: AxisShape::Polyline,
+            deformed: rest.clone(),
+            rest,
+            radius,
+            falloff: Falloff::Smooth,
+            inner: 0.0,
+        }
+    }
+}
+
+/// An axis sampled into a polyline with a frame, twist and scale per sample. Rest and
+/// deformed states are sampled at the same curve parameters, so sample `k` of one
+/// corresponds to sample `k` of the other.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampledAxis {
+    /// Sample positions.
+    pub points: Vec<Vec3>,
+    /// Rotation-minimising frame of each sample, as a rotation (local → world).
+    pub rotations: Vec<Quat>,
+    /// Twist `q` at each sample (radians).
+    pub twist: Vec<f32>,
+    /// Scale `θ` at each sample.
+    pub scale: Vec<f32>,
+    /// The start of the frame propagation: first unit tangent and the normal given to
+    /// [`double_reflection`].
+    start: Frame,
+}
+
+impl SampledAxis {
+    /// Samples an axis state. Polyline: the points themselves, with vertex tangents from
+    /// [`polyline_tangents`]. Spline: `16 · count + 1` points uniform in the curve parameter
+    /// with analytic tangents; twist and scale blended with the same basis functions.
+    /// Frames by double reflection from `first` (tangent, normal) — for the deformed state
+    /// the rest state's first frame turned by the minimal rotation between the first
+    /// tangents — or from [`Frame::from_tangent`].
+    pub fn new(
+        shape: AxisShape,
+        pts: &[AxisPoint],
+        first: Option<Frame>,
+        what: &str,
+    ) -> Result<Self> {
+        let positions: Vec<Vec3> = pts.iter().map(|p| p.position).collect();
+        let degenerate = |problem: &str| CoreError::Degenerate {
+            what: what.to_owned(),
+            problem: problem.to_owned(),
+        };
+        let (points, tangents, twist, scale) = match shape {
+            AxisShape::Polyline => (
+                positions.clone(),
+                polyline_tangents(&positions)
+                    .ok_or_else(|| degenerate("the axis has a zero-length segment"))?,
+                pts.iter().map(|p| p.twist).collect(),
+                pts.iter().map(|p| p.scale).collect(),
+            ),
+            AxisShape::Bezier | AxisShape::BSpline { .. } => {
+                let basis = match shape {
+                    AxisShape::BSpline { degree } => CurveBasis::BSpline { degree },
+                    _ => CurveBasis::Bezier,
+                };
+                let ev = CurveEvaluator::new(basis, pts.len(), what)?;
+                let m = SAMPLES_PER_POINT * pts.len();
+                let mut points = Vec::with_capacity(m + 1);
+                let mut tangents = Vec::with_capacity(m + 1);
+                let mut twist = Vec::with_capacity(m + 1);
+                let mut scale = Vec::with_capacity(m + 1);
+                for k in 0..=m {
+                    let t = k as f32 / m as f32;
+                    let (p, d) = ev.point_and_derivative(&positions, t);
+                    let w = ev.point_weights(t);
+                    let (mut q, mut s) = (0.0, 0.0);
+                    for j in 0..w.len {
+                        q += pts[w.first + j].twist * w.values[j];
+                        s += pts[w.first + j].scale * w.values[j];
+                    }
+                    points.push(p);
+                    tangents.push(d);
+                    twist.push(q);
+                    scale.push(s);
+                }
+                // Where the derivative vanishes (a cusp of the control polygon), use the
+                // chord to the neighbouring sample.
+                for k in 0..=m {
+                    if tangents[k].length_squared() <= 1e-12 * points[k].length_squared().max(1.0) {
+                        let (a, b) = if k < m { (k, k + 1) } else { (k - 1, k) };
+                        tangents[k] = points[b] - points[a];
+                    }
+                }
+                (points, tangents, twist, scale)
+            }
+        };
+        let t0 = tangents[0]
+            .try_normalize()
+            .ok_or_else(|| degenerate("the axis has no tangent at its start"))?;
+        let n0 = match first {
+            None => Frame::from_tangent(t0).map(|f| f.normal),
+            Some(f) if f.tangent == t0 => Some(f.normal),
+            Some(f) => Some(Quat::from_rotation_arc(f.tangent, t0) * f.normal),
+        }
+        .ok_or_else(|| degenerate("the axis has no tangent at its start"))?;
+        let frames = double_reflection(&points, &tangents, n0).ok_or_else(|| {
+            degenerate("the axis has a cusp (zero tangent) where frames are undefined")
+        })?;
+        Ok(Self {
+            points,
+            rotations: frames.iter().map(Frame::rotation).collect(),
+            twist,
+            scale,
+            start: Frame {
+                tangent: t0,
+                normal: n0,
+                binormal: t0.cross(n0),
+            },
+        })
+    }
+
+    /// The start of the frame propagation (first unit tangent and first normal). Passing it
+    /// to [`SampledAxis::new`] for an equal state reproduces the frames bit for bit.
+    #[must_use]
+    pub fn first_frame(&self) -> Frame {
+        self.start
+    }
+
+    /// Axis point `A` and local-to-world map `M = R W S` at fraction `f` of sample segment
+    /// `j`: position and twist/scale interpolated linearly, frame by spherical
+    /// interpolation.
+    #[must_use]
+    pub fn at(&self, j: usize, f: f32) -> (Vec3, Mat3) {
+        let a = self.points[j].lerp(self.points[j + 1], f);
+        let r = self.rotations[j].slerp(self.rotations[j + 1], f);
+        let q = self.twist[j] + (self.twist[j + 1] - self.twist[j]) * f;
+        let s = self.scale[j] + (self.scale[j + 1] - self.scale[j]) * f;
+        let m = Mat3::from_quat(r * Quat::from_rotation_x(q))
+            * Mat3::from_diagonal(Vec3::new(1.0, s, s));
+        (a, m)
+    }
+}
+
+/// Bind of an [`AxialTool`]: the sampled rest axis, and per welded vertex (indexed by vertex
+/// number) its sample segment, fraction, local coordinates `l`, the rest-state image
+/// `A_U + M₁ l` (≈ `U`) and the zone weight `w`.
+#[derive(Debug, Clone)]
+pub struct AxialBind {
+    rest: SampledAxis,
+    segment: Vec<u32>,
+    fraction: Vec<f32>,
+    local: Vec<Vec3>,
+    base: Vec<Vec3>,
+    weight: Vec<f32>,
+}
+
+impl AxialBind {
+    /// Zone weight of welded vertex `i` (0 outside the cylinder).
+    #[must_use]
+    pub fn weight(&self, i: u32) -> f32 {
+        self.weight[i as usize]
+    }
+
+    /// The sampled rest axis.
+    #[must_use]
+    pub fn rest_axis(&self) -> &SampledAxis {
+        &self.rest
+    }
+}
+
+impl Deformer for AxialTool {
+    type Bind = AxialBind;
+
+    fn validate(&self, what: &str) -> Result<()> {
+        if self.rest.len() != self.deformed.len() {
+            return Err(CoreError::Degenerate {
+                what: what.to_owned(),
+                problem: format!(
+                    "the rest axis has {} points but the deformed one has {}",
+                    self.rest.len(),
+                    self.deformed.len()
+                ),
+            });
+        }
+        if self.rest.len() < 2 {
+            return Err(CoreError::Degenerate {
+                what: what.to_owned(),
+                problem: format!(
+                    "an axis needs at least 2 distinct points, found {}",
+                    self.rest.len()
+                ),
+            });
+        }
+        check_finite(|| format!("{what}: radius"), self.radius)?;
+        if self.radius <= 0.0 {
+            return Err(CoreError::OutOfRange {
+                what: format!("{what}: radius"),
+                value: f64::from(self.radius),
+                expected: "must be > 0",
+            });
+        }
+        check_finite(|| format!("{what}: inner"), self.inner)?;
+        if !(0.0..1.0).contains(&self.inner) {
+            return Err(CoreError::OutOfRange {
+                what: format!("{what}: inner"),
+                value: f64::from(self.inner),
+                expected: "must be in [0, 1)",
+            });
+        }
+        for (state, pts) in [("rest", &self.rest), ("deformed", &self.deformed)] {
+            let w = format!("{what}: {state} axis");
+            let positions: Vec<Vec3> = pts.iter().map(|p| p.position).collect();
+            validate_polygon(&positions, &w)?;
+            for (i, p) in pts.iter().enumerate() {
+                check_finite(|| format!("{w}: point {i}: twist"), p.twist)?;
+                check_finite(|| format!("{w}: point {i}: scale"), p.scale)?;
+                if p.scale <= 0.0 {
+                    return Err(CoreError::OutOfRange {
+                        what: format!("{w}: point {i}: scale"),
+                        value: f64::from(p.scale),
+                        expected: "must be > 0",
+                    });
+                }
+            }
+        }
+        let rest = SampledAxis::new(self.shape, &self.rest, None, &format!("{what}: rest axis"))?;
+        SampledAxis::new(
+            self.shape,
+            &self.deformed,
+            Some(rest.first_frame()),
+            &format!("{what}: deformed axis"),
+        )?;
+        Ok(())
+    }
+
+    fn bind(&self, input: &BindInput<'_>) -> Result<AxialBind> {
+        let rest = SampledAxis::new(self.shape, &self.rest, None, "axial tool: rest axis")?;
+        let n = input.positions.len();
+        let mut bind = AxialBind {
+            segment: vec![0; n],
+            fraction: vec![0.0; n],
+            local: vec![Vec3::ZERO; n],
+            base: vec![Vec3::ZERO; n],
+            weight: vec![0.0; n],
+            rest,
+        };
+        let index =
+            PolylineIndex::new(bind.rest.points.clone()).ok_or_else(|| CoreError::Degenerate {
+                what: "axial tool: rest axis".to_owned(),
+                problem: "fewer than 2 samples".to_owned(),
+            })?;
+        let inv_r = 1.0 / self.radius;
+        for &i in input.active {
+            let u = input.positions[i as usize];
+            let (j, f, d2) = index.closest(u);
+            let w = self.falloff.weight(d2.sqrt() * inv_r, self.inner);
+            if w <= 0.0 {
+                continue;
+            }
+            let (a, m) = bind.rest.at(j, f);
+            // M = R W S is a rotation times diag(1, s, s) with s > 0: M⁻¹ = S⁻¹ (R W)ᵀ.
+            let local = m.inverse() * (u - a);
+            let k = i as usize;
+            bind.segment[k] = j as u32;
+            bind.fraction[k] = f;
+            bind.local[k] = local;
+            bind.base[k] = a + m * local;
+            bind.weight[k] = w;
+        }
+        Ok(bind)
+    }
+
+    fn deform(&self, bind: &AxialBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
+        let deformed = SampledAxis::new(
+            self.shape,
+            &self.deformed,
+            Some(bind.rest.first_frame()),
+            "",
+        );
+        let Ok(deformed) = deformed else {
+            // Unreachable for a validated tool; never produce garbage.
+            for (o, &i) in out.iter_mut().zip(active) {
+                *o = positions[i as usize];
+            }
+            return;
+        };
+        for (o, &i) in out.iter_mut().zip(active) {
+            let k = i as usize;
+            let u = positions[k];
+            let w = bind.weight[k];
+            if w <= 0.0 {
+                *o = u;
+                continue;
+            }
+            let (j, f, l) = (bind.segment[k] as usize, bind.fraction[k], bind.local[k]);
+            let (a2, m2) = deformed.at(j, f);
+            // D(U) − U = (A' + M₂ l) − (A + M₁ l): the second term was computed at bind time
+            // by the same operations, so the difference is exactly 0 for an unmoved axis.
+            let d = (a2 + m2 * l) - bind.base[k];
+            *o = if w == 1.0 { u + d } else { u + d * w };
+        }
+    }
+
+    /// Positions map as points; the radius scales by the uniform scale of `m`; twist angles
+    /// change sign when `m` mirrors (the frames stay right-handed); scale factors are ratios
+    /// and stay. Exact for similarity transforms (the first frame's choice cancels out).
+    fn transformed(&self, m: &Affine3A) -> Self {
+        let mirror = m.matrix3.determinant() < 0.0;
+        let map = |pts: &[AxisPoint]| -> Vec<AxisPoint> {
+            pts.iter()
+                .map(|p| AxisPoint {
+                    position: m.transform_point3(p.position),
+                    twist: if mirror { -p.twist } else { p.twist },
+                    scale: p.scale,
+                })
+                .collect()
+        };
+        Self {
+            rest: map(&self.rest),
+            deformed: map(&self.deformed),
+            radius: self.radius * uniform_scale(m),
+            ..self.clone()
+        }
+    }
+
+    fn same_rest_state(&self, other: &Self) -> bool {
+        self.shape == other.shape
+            && self.rest == other.rest
+            && self.radius == other.radius
+            && self.falloff == other.falloff
+            && self.inner == other.inner
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::curve::tests::run;
+    use proptest::prelude::*;
+    use std::f32::consts::{FRAC_PI_2, PI};
+
+    fn line(count: usize, from: Vec3, to: Vec3) -> Vec<AxisPoint> {
+        (0..count)
+            .map(|i| AxisPoint::at(from.lerp(to, i as f32 / (count - 1) as f32)))
+            .collect()
+    }
+
+    fn cloud(len: f32) -> Vec<Vec3> {
+        let mut v = Vec::new();
+        for i in 0..=16 {
+            for j in -2..=2 {
+                for k in -2..=2 {
+                    v.push(Vec3::new(
+                        len * i as f32 / 16.0,
+                        j as f32 * 0.1,
+                        k as f32 * 0.1,
+                    ));
+                }
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn unmoved_axis_without_twist_is_exactly_the_identity() {
+        let pts = cloud(2.0);
+        let mut rest = line(5, Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0));
+        rest[2].position.y = 0.3;
+        rest[3].position.z = -0.2;
+        for shape in [
+            AxisShape::Polyline,
+            AxisShape::Bezier,
+            AxisShape::BSpline { degree: 3 },
+        ] {
+            let tool = AxialTool {
+                shape,
+                ..AxialTool::new(rest.clone(), 1.0)
+            };
+            assert_eq!(run(&tool, &pts), pts, "{shape:?}");
+        }
+    }
+
+    #[test]
+    fn straight_axis_bent_into_a_quarter_circle() {
+        // Axis along x of length L = 2 with N = 8 segments; deformed vertices on the quarter
+        // circle of radius ρ = 2L/π centred at (0, ρ): vertex k at angle φₖ = (π/2) k/N.
+        // The polyline vertex tangents are the circle tangents (by symmetry) and the RMF of
+        // a planar curve keeps the binormal, so at vertex k a point (xₖ, y, z) maps to
+        // (ρ sin φₖ − y sin ψₖ, ρ − ρ cos φₖ + y cos ψₖ, z) with the tangent angle ψₖ = φₖ
+        // inside; at the two ends the polyline tangent is the chord: ψ₀ = φ₁/2,
+        // ψ_N = π/2 − φ₁/2.
+        let (len, n) = (2.0_f32, 8);
+        let rho = 2.0 * len / PI;
+        let rest = line(n + 1, Vec3::ZERO, Vec3::new(len, 0.0, 0.0));
+        let deformed: Vec<AxisPoint> = (0..=n)
+            .map(|k| {
+                let phi = FRAC_PI_2 * k as f32 / n as f32;
+                AxisPoint::at(Vec3::new(rho * phi.sin(), rho * (1.0 - phi.cos()), 0.0))
+            })
+            .collect();
+        let tool = AxialTool {
+            deformed,
+            falloff: Falloff::None,
+            ..AxialTool::new(rest, 1.0)
+        };
+        let mut pts = Vec::new();
+        let mut expected = Vec::new();
+        for k in 0..=n {
+            let phi = FRAC_PI_2 * k as f32 / n as f32;
+            let half_step = FRAC_PI_2 / n as f32 / 2.0;
+            let psi = match k {
+                0 => half_step,
+                k if k == n => FRAC_PI_2 - half_step,
+                _ => phi,
+            };
+            for (y, z) in [(0.2, 0.0), (-0.3, 0.1), (0.0, -0.25)] {
+                pts.push(Vec3::new(len * k as f32 / n as f32, y, z));
+                expected.push(Vec3::new(
+                    rho * phi.sin() - y * psi.sin(),
+                    rho * (1.0 - phi.cos()) + y * psi.cos(),
+                    z,
+                ));
+            }
+        }
+        for (o, e) in run(&tool, &pts).iter().zip(&expected) {
+            assert!(o.distance(*e) < 1e-4, "{o} vs {e}");
+        }
+    }
+
+    #[test]
+    fn analytic_twist() {
+        // Straight axis along z, deformed twist rising linearly from 0 to Θ: a point
+        // (ρ cos α, ρ sin α, z) goes to (ρ cos(α + Θz/L), ρ sin(α + Θz/L), z).
+        let (len, theta) = (2.0_f32, 1.3_f32);
+        let rest = line(2, Vec3::ZERO, Vec3::new(0.0, 0.0, len));
+        let mut deformed = rest.clone();
+        deformed[1].twist = theta;
+        let tool = AxialTool {
+            deformed,
+            falloff: Falloff::None,
+            ..AxialTool::new(rest, 1.0)
+        };
+        let mut pts = Vec::new();
+        for i in 0..=10 {
+            for a in 0..6 {
+                let (rho, alpha, z) = (0.3 + 0.05 * a as f32, a as f32, len * i as f32 / 10.0);
+                pts.push(Vec3::new(rho * alpha.cos(), rho * alpha.sin(), z));
+            }
+        }
+        for (p, o) in pts.iter().zip(run(&tool, &pts)) {
+            let rho = p.truncate().length();
+            let alpha = p.y.atan2(p.x) + theta * p.z / len;
+            let e = Vec3::new(rho * alpha.cos(), rho * alpha.sin(), p.z);
+            assert!(o.distance(e) < 1e-5, "{p}: {o} vs {e}");
+        }
+    }
+
+    #[test]
+    fn rest_twist_and_scale_cancel_matching_deformed_values() {
+        // W₂ = W₁ and S₂ = S₁ on an unmoved axis: D = identity up to rounding.
+        let pts = cloud(2.0);
+        let mut rest = line(3, Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0));
+        rest[1].twist = 0.7;
+        rest[2].scale = 1.5;
+        let tool = AxialTool::new(rest, 1.0);
+        for (p, o) in pts.iter().zip(run(&tool, &pts)) {
+            assert!(p.distance(o) < 1e-5);
+        }
+    }
+
+    #[test]
+    fn scale_scales_across_the_axis_only() {
+        let rest = line(2, Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0));
+        let mut deformed = rest.clone();
+        for p in &mut deformed {
+            p.scale = 2.0;
+        }
+        let tool = AxialTool {
+            deformed,
+            falloff: Falloff::None,
+            ..AxialTool::new(rest, 1.0)
+        };
+        let pts = [Vec3::new(0.1, 0.2, 0.5), Vec3::new(-0.3, 0.0, 0.25)];
+        let out = run(&tool, &pts);
+        assert!(out[0].distance(Vec3::new(0.2, 0.4, 0.5)) < 1e-6);
+        assert!(out[1].distance(Vec3::new(-0.6, 0.0, 0.25)) < 1e-6);
+    }
+
+    #[test]
+    fn outside_the_cylinder_nothing_moves_and_the_falloff_is_monotone() {
+        let rest = line(3, Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0));
+        let mut deformed = rest.clone();
+        deformed[2].position = Vec3::new(1.0, 1.0, 0.0);
+        let tool = AxialTool {
+            deformed,
+            ..AxialTool::new(rest, 0.5)
+        };
+        let pts: Vec<Vec3> = (0..20)
+            .map(|i| Vec3::new(1.6, 0.05 * i as f32, 0.0))
+            .collect();
+        let out = run(&tool, &pts);
+        let mut last = f32::INFINITY;
+        for (p, o) in pts.iter().zip(&out) {
+            let moved = p.distance(*o);
+            if p.y >= 0.5 {
+                assert_eq!(p, o);
+            }
+            assert!(moved <= last + 1e-6, "{p}");
+            last = moved;
+        }
+        assert!(p_moved(&pts, &out) > 0.3);
+    }
+
+    fn p_moved(a: &[Vec3], b: &[Vec3]) -> f32 {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| x.distance(*y))
+            .fold(0.0, f32::max)
+    }
+
+    #[test]
+    fn helix_axis_frames_do_not_flip() {
+        // A point bound to a helical B-spline axis: consecutive sample frames turn little
+        // about the tangent (the RMF's rotation about the tangent stays bounded by the
+        // torsion times the step), never by a flip.
+        let pts: Vec<AxisPoint> = (0..24)
+            .map(|k| {
+                let s = k as f32 * 0.5;
+                AxisPoint::at(Vec3::new(s.cos(), s.sin(), 0.3 * s))
+            })
+            .collect();
+        let axis = SampledAxis::new(AxisShape::BSpline { degree: 3 }, &pts, None, "t").unwrap();
+        for w in axis.rotations.windows(2) {
+            let (a, b) = (Mat3::from_quat(w[0]), Mat3::from_quat(w[1]));
+            // Twist of frame b relative to a, about b's tangent: angle between a's normal
+            // projected into b's normal plane and b's normal.
+            let n = a.y_axis - b.x_axis * a.y_axis.dot(b.x_axis);
+            let twist = n.dot(b.z_axis).atan2(n.dot(b.y_axis));
+            assert!(twist.abs() < 0.02, "twist step {twist}");
+        }
+    }
+
+    #[test]
+    fn bad_parameters_are_errors() {
+        let ok = AxialTool::new(line(3, Vec3::ZERO, Vec3::X), 0.5);
+        assert!(ok.validate("t").is_ok());
+        let mut t = ok.clone();
+        t.radius = 0.0;
+        assert!(t.validate("t").is_err());
+        t.radius = f32::NAN;
+        assert!(matches!(t.validate("t"), Err(CoreError::NotFinite { .. })));
+        let mut t = ok.clone();
+        t.deformed[1].position = t.deformed[0].position;
+        assert!(matches!(t.validate("t"), Err(CoreError::Degenerate { .. })));
+        let mut t = ok.clone();
+        t.rest.truncate(1);
+        t.deformed.truncate(1);
+        assert!(t.validate("t").is_err());
+        let mut t = ok.clone();
+        t.deformed[2].scale = 0.0;
+        assert!(t.validate("t").is_err());
+        let mut t = ok.clone();
+        t.deformed[2].twist = f32::INFINITY;
+        assert!(t.validate("t").is_err());
+        let mut t = ok.clone();
+        t.deformed.pop();
+        assert!(t.validate("t").is_err());
+        let mut t = ok;
+        t.shape = AxisShape::BSpline { degree: 3 };
+        assert!(t.validate("t").is_err());
+    }
+
+    #[test]
+    fn transformed_commutes_with_similarities() {
+        let pts = cloud(2.0);
+        let rest = line(4, Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0));
+        let mut deformed = rest.clone();
+        deformed[2].position += Vec3::new(0.0, 0.4, 0.1);
+        deformed[3].position += Vec3::new(-0.3, 0.8, 0.0);
+        deformed[3].twist = 0.8;
+        deformed[1].scale = 1.3;
+        let tool = AxialTool {
+            deformed,
+            ..AxialTool::new(rest, 0.4)
+        };
+        for m in [
+            Affine3A::from_scale_rotation_translation(
+                Vec3::splat(1.5),
+                Quat::from_rotation_z(0.9),
+                Vec3::new(1.0, 2.0, -1.0),
+            ),
+            Affine3A::from_scale(Vec3::new(-1.0, 1.0, 1.0)),
+        ] {
+            let a: Vec<Vec3> = run(&tool, &pts)
+                .iter()
+                .map(|p| m.transform_point3(*p))
+                .collect();
+            let moved: Vec<Vec3> = pts.iter().map(|p| m.transform_point3(*p)).collect();
+            let b = run(&tool.transformed(&m), &moved);
+            for (x, y) in a.iter().zip(&b) {
+                assert!(x.distance(*y) < 1e-4, "{x} vs {y}");
+            }
+        }
+    }
+
+    #[test]
+    fn ron_defaults_and_round_trip() {
+        let text = "(rest: [(position: (0.0, 0.0, 0.0)), (position: (1.0, 0.0, 0.0))], \
+                    deformed: [(position: (0.0, 0.0, 0.0)), (position: (1.0, 0.5, 0.0), twist: 0.3, scale: 2.0)], \
+                    radius: 0.5)";
+        let tool: AxialTool = ron::from_str(text).unwrap();
+        assert_eq!(tool.shape, AxisShape::Polyline);
+        assert_eq!(tool.falloff, Falloff::Smooth);
+        assert_eq!(tool.inner, 0.0);
+        assert_eq!((tool.rest[1].twist, tool.rest[1].scale), (0.0, 1.0));
+        assert_eq!((tool.deformed[1].twist, tool.deformed[1].scale), (0.3, 2.0));
+        let back: AxialTool = ron::from_str(&ron::to_string(&tool).unwrap()).unwrap();
+        assert_eq!(back, tool);
+        assert!(
+            ron::from_str::<AxialTool>("(rest: [], deformed: [], radius: 1.0, bogus: 1)").is_err()
+        );
+    }
+
+    proptest! {
+        #[test]
+        fn rigid_motion_of_the_axis_moves_points_rigidly(
+            angle in -3.0f32..3.0, tx in -1.0f32..1.0, ty in -1.0f32..1.0,
+            px in 0.0f32..2.0, py in -0.3f32..0.3, pz in -0.3f32..0.3,
+        ) {
+            // Deformed axis = rigid motion of the rest axis, zone covering the point fully:
+            // every point inside follows the same rigid motion.
+            let rest = line(4, Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0));
+            let m = Affine3A::from_rotation_translation(Quat::from_rotation_y(angle), Vec3::new(tx, ty, 0.0));
+            let deformed = rest.iter().map(|p| AxisPoint::at(m.transform_point3(p.position))).collect();
+            let tool = AxialTool { deformed, falloff: Falloff::None, ..AxialTool::new(rest, 5.0) };
+            let p = Vec3::new(px, py, pz);
+            let o = run(&tool, &[p])[0];
+            prop_assert!(o.distance(m.transform_point3(p)) < 1e-4);
+        }
+    }
+}

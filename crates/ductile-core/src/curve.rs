@@ -1,0 +1,750 @@
+//! Curve deformation by De Casteljau (Bézier, global) and De Boor (B-spline, local), after
+//! the generalised de Casteljau deformation of Chang & Rockwood (SIGGRAPH 1994) as described
+//! in Bechmann's survey "Multidimensional free-form deformation tools" §4.2;
+//! `docs/algorithms/curve-deformation.md` has the derivation and the decisions.
+//!
+//! The tool has a rest control polygon `P₀…Pₙ` and a deformed one `Q₀…Qₙ`. A vertex `x` is
+//! attached at bind time to its closest rest-curve point: parameter `t`, offset
+//! `o = x − C_P(t)`. The survey's two steps are:
+//!
+//! 1. *the object is mapped by an affine transformation onto each segment of the control
+//!    polygon*: segment `i` carries the map `Gᵢ(t, o) = (1 − t) Qᵢ + t Qᵢ₊₁ + Rᵢ o`, where
+//!    `Rᵢ` is the minimal rotation taking the rest segment direction `Pᵢ₊₁ − Pᵢ` to the
+//!    deformed one `Qᵢ₊₁ − Qᵢ` (so the offset turns with its segment);
+//! 2. *then De Casteljau* (Bézier) or *De Boor* (B-spline) blends the `n` mapped copies with
+//!    the remaining levels of the recursion, i.e. with the degree-`(p−1)` basis `Mᵢ` over the
+//!    segments: `D(x) = Σᵢ Mᵢ(t) Gᵢ(t, o) = C_Q(t) + (Σᵢ Mᵢ(t) Rᵢ) o`.
+//!
+//! The first level of the recursion applied to the points alone is exactly the first
+//! De Casteljau / De Boor level, so points on the rest curve land on the deformed curve. The
+//! tool evaluates the algebraically identical displacement form
+//! `D(x) = x + Σⱼ Nⱼ(t)(Qⱼ − Pⱼ) + Σᵢ Mᵢ(t)(Rᵢ − I) o`, which is exactly `x` (bit for bit)
+//! when `Q = P` and exactly `x` wherever no moved control point has a non-zero basis function.
+
+use glam::{Affine3A, Mat3, Quat, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all, bernstein_all_with_derivative};
+use crate::error::{CoreError, Result, check_finite_vec3};
+use crate::frames::PolylineIndex;
+use crate::tool::{BindInput, Deformer};
+
+/// Largest number of control points a Bézier polygon may have (degree [`MAX_DEGREE`]).
+pub const MAX_BEZIER_POINTS: usize = MAX_DEGREE + 1;
+
+/// Samples per control point of the polyline used to seed the closest-point search.
+const SAMPLES_PER_POINT: usize = 16;
+
+/// Gauss–Newton refinements of a closest-point parameter.
+const REFINE_STEPS: usize = 4;
+
+/// The polynomial basis of a control polygon.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum CurveBasis {
+    /// One Bézier curve of degree `n` (n + 1 control points, at most [`MAX_BEZIER_POINTS`]):
+    /// `C(t) = Σ Bᵢⁿ(t) Pᵢ`, `t ∈ [0, 1]`. Every point moves every part of the curve.
+    Bezier,
+    /// A clamped uniform B-spline of the given degree (1 ≤ degree ≤ [`MAX_DEGREE`], more
+    /// control points than the degree): `C(t) = Σ Nᵢ,ₚ(t) Pᵢ`, `t ∈ [0, 1]`. Control point
+    /// `i` moves only the part `t ∈ [u_i, u_{i+p+1})`.
+    BSpline {
+        /// The degree `p`.
+        degree: usize,
+    },
+}
+
+/// Evaluates a curve of a given basis and control-point count: the knot vectors are built
+/// once. Weights are written to fixed buffers of `MAX_DEGREE + 1` entries.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CurveEvaluator {
+    basis: CurveBasis,
+    count: usize,
+    /// Knots of the curve (B-spline).
+    knots: Option<KnotVector>,
+    /// Knots of the degree-`(p−1)` segment basis (B-spline with `p ≥ 2`).
+    segment_knots: Option<KnotVector>,
+}
+
+/// Basis weights at one parameter: `values[..len]` belong to indices `first..first + len`.
+#[derive(Debug, Clone, Copy)]
+pub struct Weights {
+    /// Index of the first non-zero function.
+    pub first: usize,
+    /// Number of non-zero functions.
+    pub len: usize,
+    /// Their values.
+    pub values: [f32; MAX_DEGREE + 1],
+}
+
+impl CurveEvaluator {
+    /// The evaluator for `count` control points. Fails (naming `what`) when the count does
+    /// not fit the basis: fewer than 2 points, more than [`MAX_BEZIER_POINTS`] for Bézier,
+    /// or a B-spline degree outside `1..=MAX_DEGREE` or not below the count.
+    pub fn new(basis: CurveBasis, count: usize, what: &str) -> Result<Self> {
+        if count < 2 {
+            return Err(CoreError::Degenerate {
+                what: what.to_owned(),
+                problem: format!("a curve needs at least 2 control points, found {count}"),
+            });
+        }
+        match basis {
+            CurveBasis::Bezier => {
+                if count > MAX_BEZIER_POINTS {
+                    return Err(CoreError::OutOfRange {
+                        what: format!("{what}: number of Bézier control points"),
+                        value: count as f64,
+                        expected: "must be at most 16 (degree 15)",
+                    });
+                }
+                Ok(Self {
+                    basis,
+                    count,
+                    knots: None,
+                    segment_knots: None,
+                })
+            }
+            CurveBasis::BSpline { degree } => {
+                if degree == 0 || degree > MAX_DEGREE || degree >= count {
+                    return Err(CoreError::OutOfRange {
+                        what: format!("{what}: B-spline degree"),
+                        value: degree as f64,
+                        expected: "must be in 1..=15 and less than the number of control points",
+                    });
+                }
+                let knots = KnotVector::clamped_uniform(degree, count);
+                let segment_knots = if degree >= 2 {
+                    KnotVector::clamped_uniform(degree - 1, count - 1)
+                } else {
+                    None
+                };
+                Ok(Self {
+                    basis,
+                    count,
+                    knots,
+                    segment_knots,
+                })
+            }
+        }
+    }
+
+    /// The basis.
+    #[must_use]
+    pub fn basis(&self) -> CurveBasis {
+        self.basis
+    }
+
+    /// Number of control points.
+    #[must_use]
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// The degree `p` of the curve.
+    #[must_use]
+    pub fn degree(&self) -> usize {
+        match self.basis {
+            CurveBasis::Bezier => self.count - 1,
+            CurveBasis::BSpline { degree } => degree,
+        }
+    }
+
+    /// The non-zero basis functions of the control points at `t ∈ [0, 1]` (clamped):
+    /// Bernstein `Bᵢⁿ(t)` or B-spline `Nᵢ,ₚ(t)`.
+    #[must_use]
+    pub fn point_weights(&self, t: f32) -> Weights {
+        let t = t.clamp(0.0, 1.0);
+        let mut w = Weights {
+            first: 0,
+            len: self.degree() + 1,
+            values: [0.0; MAX_DEGREE + 1],
+        };
+        match &self.knots {
+            None => bernstein_all(self.count - 1, t, &mut w.values),
+            Some(k) => w.first = k.basis(t, &mut w.values) - k.degree(),
+        }
+        w
+    }
+
+    /// The non-zero degree-`(p−1)` basis functions over the `count − 1` polygon segments at
+    /// `t`: the weights of the last `p − 1` levels of De Casteljau (`Bᵢⁿ⁻¹`) or De Boor
+    /// (`Nᵢ,ₚ₋₁` on the knot vector without its end knots). For a linear B-spline it is the
+    /// indicator of the segment containing `t`.
+    #[must_use]
+    pub fn segment_weights(&self, t: f32) -> Weights {
+        let t = t.clamp(0.0, 1.0);
+        let mut w = Weights {
+            first: 0,
+            len: self.degree(),
+            values: [0.0; MAX_DEGREE + 1],
+        };
+        match (&self.knots, &self.segment_knots) {
+            (None, _) => bernstein_all(self.count - 2, t, &mut w.values),
+            (Some(k), None) => {
+                // Degree 1: N_{s−1}, N_s are non-zero; segment s − 1 holds t.
+                w.first = k.span(t) - 1;
+                w.values[0] = 1.0;
+            }
+            (Some(_), Some(sk)) => w.first = sk.basis(t, &mut w.values) - sk.degree(),
+        }
+        w
+    }
+
+    /// `C(t) = Σ wᵢ Pᵢ`.
+    #[must_use]
+    pub fn point(&self, ctrl: &[Vec3], t: f32) -> Vec3 {
+        let w = self.point_weights(t);
+        (0..w.len).fold(Vec3::ZERO, |acc, k| acc + ctrl[w.first + k] * w.values[k])
+    }
+
+    /// `C(t)` and `C'(t)` (derivative with respect to `t`).
+    #[must_use]
+    pub fn point_and_derivative(&self, ctrl: &[Vec3], t: f32) -> (Vec3, Vec3) {
+        let t = t.clamp(0.0, 1.0);
+        let mut v = [0.0_f32; MAX_DEGREE + 1];
+        let mut d = [0.0_f32; MAX_DEGREE + 1];
+        let first = match &self.knots {
+            None => {
+                bernstein_all_with_derivative(self.count - 1, t, &mut v, &mut d);
+                0
+            }
+            Some(k) => k.basis_with_derivative(t, &mut v, &mut d) - k.degree(),
+        };
+        (0..=self.degree()).fold((Vec3::ZERO, Vec3::ZERO), |(p, dp), k| {
+            (p + ctrl[first + k] * v[k], dp + ctrl[first + k] * d[k])
+        })
+    }
+
+    /// The parameter of the point of the curve closest to `x`: the closest point of the
+    /// indexed polyline `samples` (from [`CurveEvaluator::samples`]), refined by
+    /// Gauss–Newton steps `t ← t − (C − x)·C' / |C'|²` clamped to `[0, 1]` and kept only
+    /// while they bring the point closer. Returns `(t, |x − C(t)|²)`.
+    #[must_use]
+    pub fn closest_parameter(&self, ctrl: &[Vec3], samples: &PolylineIndex, x: Vec3) -> (f32, f32) {
+        let (s, f, _) = samples.closest(x);
+        let step = 1.0 / (samples.points().len() - 1) as f32;
+        let mut t = ((s as f32 + f) * step).clamp(0.0, 1.0);
+        let mut best = self.point(ctrl, t).distance_squared(x);
+        for _ in 0..REFINE_STEPS {
+            let (c, dc) = self.point_and_derivative(ctrl, t);
+            let l2 = dc.length_squared();
+            if l2 <= f32::EPSILON * f32::EPSILON {
+                break;
+            }
+            let next = (t - (c - x).dot(dc) / l2).clamp(0.0, 1.0);
+            let d = self.point(ctrl, next).distance_squared(x);
+            if d < best {
+                best = d;
+                t = next;
+            } else {
+                break;
+            }
+        }
+        (t, best)
+    }
+
+    /// The curve sampled at `t = k / m`, `k = 0..=m`, with `m = 16 · count`, indexed for
+    /// closest-point queries.
+    #[must_use]
+    pub fn samples(&self, ctrl: &[Vec3]) -> PolylineIndex {
+        let m = SAMPLES_PER_POINT * self.count;
+        let points = (0..=m)
+            .map(|k| self.point(ctrl, k as f32 / m as f32))
+            .collect();
+        // m ≥ 32, so the index always exists.
+        PolylineIndex::new(points).unwrap_or_else(|| unreachable!("at least two samples"))
+    }
+}
+
+/// Checks a control polygon: every point finite, no zero-length segment.
+pub(crate) fn validate_polygon(points: &[Vec3], what: &str) -> Result<()> {
+    for (i, p) in points.iter().enumerate() {
+        check_finite_vec3(|| format!("{what}: point {i}"), *p)?;
+    }
+    for (i, w) in points.windows(2).enumerate() {
+        if w[0] == w[1] {
+            return Err(CoreError::Degenerate {
+                what: what.to_owned(),
+                problem: format!(
+                    "segment {i} has zero length (points {i} and {} coincide)",
+                    i + 1
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Curve deformation: a rest and a deformed control polygon of the same basis and size.
+///
+/// `D(x) = C_Q(t) + (Σᵢ Mᵢ(t) Rᵢ)(x − C_P(t))` with `t` the rest-curve parameter closest to
+/// `x` (module documentation). Points beyond the curve ends attach to the end point and move
+/// rigidly with the end segment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CurveTool {
+    /// Bézier (global, De Casteljau) or B-spline (local, De Boor).
+    pub basis: CurveBasis,
+    /// Rest control polygon `P₀…Pₙ` (mesh space).
+    pub rest: Vec<Vec3>,
+    /// Deformed control polygon `Q₀…Qₙ` (mesh space), as many points as `rest`.
+    pub deformed: Vec<Vec3>,
+}
+
+impl CurveTool {
+    /// A tool whose deformed polygon equals its rest polygon (the identity).
+    #[must_use]
+    pub fn new(basis: CurveBasis, rest: Vec<Vec3>) -> Self {
+        Self {
+            basis,
+            deformed: rest.clone(),
+            rest,
+        }
+    }
+
+    /// The minimal rotations `Rᵢ` taking each rest segment direction to the deformed one
+    /// (exactly the identity where they are equal).
+    #[must_use]
+    pub fn segment_rotations(&self) -> Vec<Mat3> {
+        self.rest
+            .windows(2)
+            .zip(self.deformed.windows(2))
+            .map(|(p, q)| {
+                let (a, b) = ((p[1] - p[0]).normalize(), (q[1] - q[0]).normalize());
+                if a == b {
+                    Mat3::IDENTITY
+                } else {
+                    Mat3::from_quat(Quat::from_rotation_arc(a, b))
+                }
+            })
+            .collect()
+    }
+}
+
+/// Bind of a [`CurveTool`]: per welded vertex (indexed by vertex number; only active ones
+/// are meaningful) the rest parameter `t` and offset `o = x − C_P(t)`.
+#[derive(Debug, Clone)]
+pub struct CurveBind {
+    evaluator: CurveEvaluator,
+    params: Vec<f32>,
+    offsets: Vec<Vec3>,
+}
+
+impl CurveBind {
+    /// The bound rest parameter of welded vertex `i`.
+    #[must_use]
+    pub fn parameter(&self, i: u32) -> f32 {
+        self.params[i as usize]
+    }
+}
+
+impl Deformer for CurveTool {
+    type Bind = CurveBind;
+
+    fn validate(&self, what: &str) -> Result<()> {
+        if self.rest.len() != self.deformed.len() {
+            return Err(CoreError::Degenerate {
+                what: what.to_owned(),
+                problem: format!(
+                    "the rest polygon has {} points but the deformed one has {}",
+                    self.rest.len(),
+                    self.deformed.len()
+                ),
+            });
+        }
+        CurveEvaluator::new(self.basis, self.rest.len(), what)?;
+        validate_polygon(&self.rest, &format!("{what}: rest polygon"))?;
+        validate_polygon(&self.deformed, &format!("{what}: deformed polygon"))
+    }
+
+    fn bind(&self, input: &BindInput<'_>) -> Result<CurveBind> {
+        let evaluator = CurveEvaluator::new(self.basis, self.rest.len(), "curve tool")?;
+        let samples = evaluator.samples(&self.rest);
+        let n = input.positions.len();
+        let mut params = vec![0.0; n];
+        let mut offsets = vec![Vec3::ZERO; n];
+        for &i in input.active {
+            let x = input.positions[i as usize];
+            let (t, _) = evaluator.closest_parameter(&self.rest, &samples, x);
+            params[i as usize] = t;
+            offsets[i as usize] = x - evaluator.point(&self.rest, t);
+        }
+        Ok(CurveBind {
+            evaluator,
+            params,
+            offsets,
+        })
+    }
+
+    fn deform(&self, bind: &CurveBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
+        let ev = &bind.evaluator;
+        let moves: Vec<Vec3> = self
+            .deformed
+            .iter()
+            .zip(&self.rest)
+            .map(|(q, p)| *q - *p)
+            .collect();
+        let turns: Vec<Mat3> = self
+            .segment_rotations()
+            .into_iter()
+            .map(|r| r - Mat3::IDENTITY)
+            .collect();
+        for (o, &i) in out.iter_mut().zip(active) {
+            let (t, off) = (bind.params[i as usize], bind.offsets[i as usize]);
+            let w = ev.point_weights(t);
+            let mut d = Vec3::ZERO;
+            for k in 0..w.len {
+                d += moves[w.first + k] * w.values[k];
+            }
+            let m = ev.segment_weights(t);
+            let mut turn = Mat3::ZERO;
+            for k in 0..m.len {
+                turn += turns[m.first + k] * m.values[k];
+            }
+            *o = positions[i as usize] + d + turn * off;
+        }
+    }
+
+    /// Control points map as points. Exact for rigid motions and uniform scalings (the
+    /// rotations `Rᵢ` are conjugated by the rotation part); under shear or non-uniform scale
+    /// the segment rotations of the mapped polygons are recomputed there, which is the tool
+    /// defined in the target space.
+    fn transformed(&self, m: &Affine3A) -> Self {
+        Self {
+            basis: self.basis,
+            rest: self.rest.iter().map(|p| m.transform_point3(*p)).collect(),
+            deformed: self
+                .deformed
+                .iter()
+                .map(|p| m.transform_point3(*p))
+                .collect(),
+        }
+    }
+
+    fn same_rest_state(&self, other: &Self) -> bool {
+        self.basis == other.basis && self.rest == other.rest
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::mesh::Topology;
+    use proptest::prelude::*;
+
+    /// Validates, binds on `pts` (all active, no topology) and deforms them.
+    pub(crate) fn run<T: Deformer>(tool: &T, pts: &[Vec3]) -> Vec<Vec3> {
+        tool.validate("t").unwrap();
+        let topo = Topology {
+            weld: vec![],
+            representative: vec![],
+            triangles: vec![],
+        };
+        let active: Vec<u32> = (0..pts.len() as u32).collect();
+        let bind = tool
+            .bind(&BindInput {
+                positions: pts,
+                topology: &topo,
+                active: &active,
+            })
+            .unwrap();
+        let mut out = vec![Vec3::ZERO; pts.len()];
+        tool.deform(&bind, pts, &active, &mut out);
+        out
+    }
+
+    fn straight(count: usize, len: f32) -> Vec<Vec3> {
+        (0..count)
+            .map(|i| Vec3::new(len * i as f32 / (count - 1) as f32, 0.0, 0.0))
+            .collect()
+    }
+
+    fn cloud() -> Vec<Vec3> {
+        let mut v = Vec::new();
+        for i in 0..=20 {
+            for j in -2..=2 {
+                for k in -2..=2 {
+                    v.push(Vec3::new(
+                        i as f32 * 0.2 - 0.5,
+                        j as f32 * 0.15,
+                        k as f32 * 0.15,
+                    ));
+                }
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn segment_basis_is_the_derivative_basis() {
+        // C'(t) = Σ Mᵢ(t) · p/(u_{i+p+1} − u_{i+1}) (P_{i+1} − P_i) for B-splines and
+        // n Σ Bᵢⁿ⁻¹ (P_{i+1} − P_i) for Bézier: checks that the segment weights are the
+        // degree-(p−1) basis on the right knots.
+        let ctrl = vec![
+            Vec3::ZERO,
+            Vec3::new(1.0, 2.0, 0.0),
+            Vec3::new(2.0, -1.0, 1.0),
+            Vec3::new(3.0, 0.5, 2.0),
+            Vec3::new(4.0, 1.0, -1.0),
+            Vec3::new(5.0, 0.0, 0.0),
+        ];
+        for basis in [
+            CurveBasis::Bezier,
+            CurveBasis::BSpline { degree: 2 },
+            CurveBasis::BSpline { degree: 3 },
+        ] {
+            let ev = CurveEvaluator::new(basis, ctrl.len(), "t").unwrap();
+            let p = ev.degree() as f32;
+            for k in 0..=20 {
+                let t = k as f32 / 20.0;
+                let (_, dc) = ev.point_and_derivative(&ctrl, t);
+                let m = ev.segment_weights(t);
+                let mut d = Vec3::ZERO;
+                for j in 0..m.len {
+                    let i = m.first + j;
+                    let scale = match &ev.knots {
+                        None => p,
+                        Some(kv) => p / (kv.knots()[i + ev.degree() + 1] - kv.knots()[i + 1]),
+                    };
+                    d += (ctrl[i + 1] - ctrl[i]) * (scale * m.values[j]);
+                }
+                assert!(
+                    (d - dc).length() < 1e-3 * dc.length().max(1.0),
+                    "{basis:?} t={t}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn unmoved_polygon_is_exactly_the_identity() {
+        let pts = cloud();
+        let mut rest = straight(5, 3.0);
+        rest[2].y = 0.4;
+        for basis in [CurveBasis::Bezier, CurveBasis::BSpline { degree: 3 }] {
+            let out = run(&CurveTool::new(basis, rest.clone()), &pts);
+            assert_eq!(out, pts);
+        }
+    }
+
+    #[test]
+    fn points_on_the_rest_curve_land_on_the_deformed_curve() {
+        let rest = straight(4, 3.0);
+        let deformed = vec![
+            Vec3::ZERO,
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(2.0, -1.0, 0.5),
+            Vec3::new(3.0, 0.0, 0.0),
+        ];
+        for basis in [CurveBasis::Bezier, CurveBasis::BSpline { degree: 2 }] {
+            let tool = CurveTool {
+                basis,
+                rest: rest.clone(),
+                deformed: deformed.clone(),
+            };
+            let ev = CurveEvaluator::new(basis, 4, "t").unwrap();
+            let ts: Vec<f32> = (0..=10).map(|k| k as f32 / 10.0).collect();
+            let pts: Vec<Vec3> = ts.iter().map(|&t| ev.point(&rest, t)).collect();
+            let out = run(&tool, &pts);
+            for (t, o) in ts.iter().zip(&out) {
+                assert!((*o - ev.point(&deformed, *t)).length() < 1e-4, "t = {t}");
+            }
+        }
+    }
+
+    #[test]
+    fn straight_bezier_matches_generalised_de_casteljau() {
+        // For a straight, evenly spaced rest polygon C_P(t) = P₀ + t (Pₙ − P₀), so the
+        // offset o is the point's (y, z) and D must equal the explicit recursion: level 1
+        // maps the point affinely onto each segment, (1 − t) Qᵢ + t Qᵢ₊₁ + Rᵢ o, and the
+        // remaining levels interpolate linearly with t.
+        let rest = straight(4, 3.0);
+        let deformed = vec![
+            Vec3::ZERO,
+            Vec3::new(1.0, 0.8, 0.0),
+            Vec3::new(2.2, 1.0, 0.3),
+            Vec3::new(2.5, 2.5, 0.0),
+        ];
+        let tool = CurveTool {
+            basis: CurveBasis::Bezier,
+            rest: rest.clone(),
+            deformed: deformed.clone(),
+        };
+        let rots = tool.segment_rotations();
+        let pts = vec![
+            Vec3::new(0.9, 0.2, -0.1),
+            Vec3::new(2.1, -0.3, 0.2),
+            Vec3::new(1.5, 0.0, 0.25),
+        ];
+        let out = run(&tool, &pts);
+        for (x, o) in pts.iter().zip(&out) {
+            let t = x.x / 3.0;
+            let off = Vec3::new(0.0, x.y, x.z);
+            let mut level: Vec<Vec3> = (0..3)
+                .map(|i| deformed[i] * (1.0 - t) + deformed[i + 1] * t + rots[i] * off)
+                .collect();
+            while level.len() > 1 {
+                level = level
+                    .windows(2)
+                    .map(|w| w[0] * (1.0 - t) + w[1] * t)
+                    .collect();
+            }
+            assert!((level[0] - *o).length() < 1e-4, "{x}: {} vs {o}", level[0]);
+        }
+    }
+
+    #[test]
+    fn bspline_is_local_and_bezier_is_global() {
+        let pts = cloud();
+        let rest = straight(8, 3.0);
+        let moved = 2;
+        let mut deformed = rest.clone();
+        deformed[moved] += Vec3::new(0.0, 0.5, 0.2);
+        // B-spline degree 3: Nⱼ is non-zero on [u_j, u_{j+4}); the segment functions of the
+        // segments touching point j are non-zero inside the same interval.
+        let tool = CurveTool {
+            basis: CurveBasis::BSpline { degree: 3 },
+            rest: rest.clone(),
+            deformed,
+        };
+        let kv = KnotVector::clamped_uniform(3, 8).unwrap();
+        let (lo, hi) = (kv.knots()[moved], kv.knots()[moved + 4]);
+        let topo = Topology {
+            weld: vec![],
+            representative: vec![],
+            triangles: vec![],
+        };
+        let active: Vec<u32> = (0..pts.len() as u32).collect();
+        let input = BindInput {
+            positions: &pts,
+            topology: &topo,
+            active: &active,
+        };
+        let bind = tool.bind(&input).unwrap();
+        let mut out = vec![Vec3::ZERO; pts.len()];
+        tool.deform(&bind, &pts, &active, &mut out);
+        let (mut inside_moved, mut outside) = (0, 0);
+        for (k, (x, o)) in pts.iter().zip(&out).enumerate() {
+            let t = bind.parameter(k as u32);
+            if t <= lo || t >= hi {
+                assert_eq!(x, o, "t = {t} is outside [{lo}, {hi}) but moved");
+                outside += 1;
+            } else if x != o {
+                inside_moved += 1;
+            }
+        }
+        assert!(
+            outside > 50 && inside_moved > 50,
+            "{outside} {inside_moved}"
+        );
+
+        let mut deformed = rest.clone();
+        deformed[moved] += Vec3::new(0.0, 0.5, 0.2);
+        let bez = CurveTool {
+            basis: CurveBasis::Bezier,
+            rest,
+            deformed,
+        };
+        let out = run(&bez, &pts);
+        for (x, o) in pts.iter().zip(&out) {
+            // Global: every point strictly inside the curve's parameter range moves.
+            if x.x > 0.01 && x.x < 2.99 {
+                assert!(x.distance(*o) > 0.0, "{x} did not move");
+            }
+        }
+    }
+
+    #[test]
+    fn quarter_bend_turns_offsets_with_the_curve() {
+        // Linear B-spline (a polyline): a point at the middle of a segment with offset y
+        // follows the segment rotated by 90°.
+        let rest = vec![Vec3::ZERO, Vec3::X, Vec3::new(2.0, 0.0, 0.0)];
+        let deformed = vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0)];
+        let tool = CurveTool {
+            basis: CurveBasis::BSpline { degree: 1 },
+            rest,
+            deformed,
+        };
+        let out = run(&tool, &[Vec3::new(1.5, 0.2, 0.1), Vec3::new(0.5, 0.2, 0.0)]);
+        assert!(
+            (out[0] - Vec3::new(0.8, 0.5, 0.1)).length() < 1e-5,
+            "{}",
+            out[0]
+        );
+        assert!((out[1] - Vec3::new(0.5, 0.2, 0.0)).length() < 1e-6);
+    }
+
+    #[test]
+    fn bad_parameters_are_errors() {
+        let ok = straight(4, 1.0);
+        let mut t = CurveTool::new(CurveBasis::BSpline { degree: 3 }, ok.clone());
+        assert!(t.validate("t").is_ok());
+        t.deformed.pop();
+        assert!(t.validate("t").is_err());
+        let mut t = CurveTool::new(CurveBasis::BSpline { degree: 4 }, ok.clone());
+        assert!(t.validate("t").is_err());
+        t.basis = CurveBasis::BSpline { degree: 0 };
+        assert!(t.validate("t").is_err());
+        let mut t = CurveTool::new(CurveBasis::Bezier, ok.clone());
+        t.deformed[1] = t.deformed[2];
+        assert!(matches!(t.validate("t"), Err(CoreError::Degenerate { .. })));
+        t.deformed[1] = Vec3::NAN;
+        assert!(matches!(t.validate("t"), Err(CoreError::NotFinite { .. })));
+        let t = CurveTool::new(CurveBasis::Bezier, vec![Vec3::ZERO]);
+        assert!(t.validate("t").is_err());
+        let t = CurveTool::new(CurveBasis::Bezier, straight(17, 1.0));
+        assert!(t.validate("t").is_err());
+    }
+
+    #[test]
+    fn transformed_commutes_with_rigid_motions() {
+        let pts = cloud();
+        let rest = straight(5, 3.0);
+        let mut deformed = rest.clone();
+        deformed[3] += Vec3::new(0.0, 0.6, 0.0);
+        deformed[4] += Vec3::new(-0.5, 1.0, 0.3);
+        let tool = CurveTool {
+            basis: CurveBasis::BSpline { degree: 3 },
+            rest,
+            deformed,
+        };
+        let m = Affine3A::from_scale_rotation_translation(
+            Vec3::splat(2.0),
+            Quat::from_rotation_y(0.7),
+            Vec3::new(1.0, -2.0, 0.5),
+        );
+        let a: Vec<Vec3> = run(&tool, &pts)
+            .iter()
+            .map(|p| m.transform_point3(*p))
+            .collect();
+        let moved: Vec<Vec3> = pts.iter().map(|p| m.transform_point3(*p)).collect();
+        let b = run(&tool.transformed(&m), &moved);
+        for (x, y) in a.iter().zip(&b) {
+            assert!(x.distance(*y) < 1e-4, "{x} vs {y}");
+        }
+    }
+
+    #[test]
+    fn ron_round_trip() {
+        let text = "(basis: BSpline(degree: 2), rest: [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (2.0, 0.0, 0.0)], \
+                    deformed: [(0.0, 0.0, 0.0), (1.0, 1.0, 0.0), (2.0, 0.0, 0.0)])";
+        let tool: CurveTool = ron::from_str(text).unwrap();
+        assert_eq!(tool.basis, CurveBasis::BSpline { degree: 2 });
+        assert_eq!(tool.deformed[1], Vec3::new(1.0, 1.0, 0.0));
+        let back: CurveTool = ron::from_str(&ron::to_string(&tool).unwrap()).unwrap();
+        assert_eq!(back, tool);
+    }
+
+    proptest! {
+        #[test]
+        fn any_unmoved_bspline_is_the_identity(
+            ys in proptest::collection::vec(-1.0f32..1.0, 6),
+            px in -1.0f32..4.0, py in -1.0f32..1.0, pz in -1.0f32..1.0,
+        ) {
+            let rest: Vec<Vec3> = ys.iter().enumerate()
+                .map(|(i, &y)| Vec3::new(i as f32 * 0.6, y, 0.3 * y * y)).collect();
+            let tool = CurveTool::new(CurveBasis::BSpline { degree: 3 }, rest);
+            let p = [Vec3::new(px, py, pz)];
+            prop_assert_eq!(run(&tool, &p)[0], p[0]);
+        }
+    }
+}
