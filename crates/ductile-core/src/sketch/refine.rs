@@ -196,9 +196,8 @@ mod tests {
         let f = |p: Vec3| Vec3::new(3.0 * p.x, p.y, 3.0 * p.x * (1.0 - p.x));
         v.deformed = v.input.iter().map(|&p| f(p)).collect();
         let splits = refine(&mut mesh, &mut v, &RefineOptions::default(), |p, _| f(p));
-        // Both x-edges (0–1 and 2–3) are split first; the diagonal 1–2 is stretched less
-        // than 1.5× (√10/√2 ≈ 2.24 — it is stretched) but its midpoint (0.5, 0.5) maps onto
-        // the straight chord? No: it bows too, so it is split as well.
+        // Edge 0–1 comes first in the sorted queue and is both stretched (3×) and bent
+        // (its midpoint bows out to z = 0.75).
         assert!(splits.len() >= 2, "{splits:?}");
         assert_eq!((splits[0].a, splits[0].b), (0, 1));
         // Recursion: some split has a new vertex as an end.
