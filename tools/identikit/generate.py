@@ -105,6 +105,7 @@ def build(lm):
     """The areas and the macro library from the landmarks `lm` (left side for pairs)."""
     P = {k: np.asarray(v, np.float64) for k, v in lm.items()}
     mid = lambda *names: np.mean([P[n] for n in names], axis=0)  # noqa: E731
+    on_plane = lambda p: np.array([X0, p[1], p[2]])  # noqa: E731
 
     # ---- Areas (left shapes; right ones are exact mirrors) ----
     a = {}
@@ -129,6 +130,12 @@ def build(lm):
     a["left-cheek"] = [sphere(mid("cheekbone", "cheek") + [0, 0, -0.1], 1.0)]
     a["right-cheek"] = [mirror_shape(s) for s in a["left-cheek"]]
     a["cheeks"] = list(a["left-cheek"] + a["right-cheek"])
+    # Tighter areas for the macros with small ε (less work per evaluation).
+    pair = lambda c, r: [sphere(c, r), mirror_shape(sphere(c, r))]  # noqa: E731
+    a["eye-corners"] = pair(P["eye-inner"], 0.3) + pair(P["eye-outer"], 0.3)
+    a["nose-wings"] = pair(P["nose-wing"], 0.35)
+    a["cheekbones"] = pair(P["cheekbone"], 0.6)
+    a["ear-lobes"] = pair(P["ear-lobe"], 0.4)
     a["left-ear"] = [sphere(P["ear"], 1.35)]
     a["right-ear"] = [mirror_shape(s) for s in a["left-ear"]]
     a["both-ears"] = list(a["left-ear"] + a["right-ear"])
@@ -147,8 +154,8 @@ def build(lm):
     macro("nose-length", "Nose longer / shorter", "Nose", "nose",
           shift(P["nose-tip"], (0, -0.35, 1), 0.22, 0.24), ("Above", 0.85))
     macro("nose-size", "Nose bigger / smaller", "Nose", "nose",
-          scale(mid("nose-tip", "nose-wing") + [-0.16, 0.1, -0.25], 0.3, 0.3))
-    macro("nose-width", "Nose wider / narrower", "Nose", "nose",
+          scale(on_plane(mid("nose-tip", "nose-wing") + [0, 0.1, -0.25]), 0.3, 0.3))
+    macro("nose-width", "Nose wider / narrower", "Nose", "nose-wings",
           both(shift(P["nose-wing"] + [0, 0.1, 0], lateral, 0.08, 0.17)), ("Above", 0.9))
     macro("nostril-flare", "Nostrils flared / pinched", "Nose", "nostrils",
           both(shift(P["nose-wing"], (1, 0.2, -0.3), 0.06, 0.1)))
@@ -159,7 +166,7 @@ def build(lm):
           shift(mid("nose-bridge", "nose-tip", "nose-tip") + [0, 0, 0.02], fwd, 0.07, 0.14))
     macro("nose-tip-up", "Nose tip up / down", "Nose", "nose",
           shift(P["nose-tip"], up, 0.12, 0.2), ("Above", 0.9))
-    macro("nose-bridge-width", "Nose bridge wider / narrower", "Nose", "nose",
+    macro("nose-bridge-width", "Nose bridge wider / narrower", "Nose", "nose-wings",
           both(shift(mid("nose-bridge", "nose-tip") + [0.15, 0, -0.08], lateral, 0.06, 0.16)))
 
     # Eyes.
@@ -169,11 +176,11 @@ def build(lm):
           both(shift(P["eye"], lateral, 0.12, 0.3)), ("Above", 0.9))
     macro("eye-height", "Eyes higher / lower", "Eyes", "both-eyes",
           both(shift(P["eye"], up, 0.1, 0.3)), ("Above", 0.9))
-    macro("eye-tilt", "Eyes tilted up / down at the outer corners", "Eyes", "both-eyes",
+    macro("eye-tilt", "Eyes tilted up / down at the outer corners", "Eyes", "eye-corners",
           both(shift(P["eye-outer"], up, 0.07, 0.17) + shift(P["eye-inner"], up, -0.04, 0.14)))
     macro("eye-depth", "Eyes deep-set / prominent", "Eyes", "both-eyes",
           both(shift(P["eye"], (0.1, 0, -1), 0.1, 0.28)), ("Above", 0.9))
-    macro("eye-width", "Eyes longer / shorter", "Eyes", "both-eyes",
+    macro("eye-width", "Eyes longer / shorter", "Eyes", "eye-corners",
           both(shift(P["eye-outer"], lateral, 0.06, 0.14) + shift(P["eye-inner"], lateral, -0.04, 0.12)))
 
     # Brows & forehead.
@@ -198,11 +205,11 @@ def build(lm):
           both(shift(P["brow-outer"] + [0.35, 0.55, -0.5], (1, 0, 0.2), 0.1, 0.35)))
 
     # Cheeks.
-    macro("cheekbones", "Cheekbones prominent / flat", "Cheeks", "cheeks",
+    macro("cheekbones", "Cheekbones prominent / flat", "Cheeks", "cheekbones",
           both(shift(P["cheekbone"], (0.7, 0.1, 0.7), 0.1, 0.28)), ("Above", 0.9))
     macro("cheek-fullness", "Cheeks full / hollow", "Cheeks", "cheeks",
           both(shift(P["cheek"] + [0.05, 0.05, 0], (0.6, 0, 0.8), 0.12, 0.3)))
-    macro("cheekbone-height", "Cheekbones higher / lower", "Cheeks", "cheeks",
+    macro("cheekbone-height", "Cheekbones higher / lower", "Cheeks", "cheekbones",
           both(shift(P["cheekbone"], up, 0.08, 0.28)), ("Above", 0.9))
 
     # Mouth.
@@ -231,7 +238,7 @@ def build(lm):
     macro("chin-width", "Chin wider / narrower", "Chin & Jaw", "chin",
           both(shift(P["chin-side"], lateral, 0.08, 0.22)))
     macro("chin-cleft", "Chin cleft / smooth", "Chin & Jaw", "chin",
-          shift(P["chin"] + [0, 0.02, 0], fwd, -0.04, 0.07))
+          shift(P["chin"] + [0, 0.02, 0], fwd, -0.06, 0.08))
     macro("jaw-width", "Jaw wider / narrower", "Chin & Jaw", "jaw",
           both(shift(P["jaw-angle"], (1, -0.1, 0), 0.14, 0.4)), ("Above", 0.9))
     macro("jaw-angle", "Jaw angle lower / higher", "Chin & Jaw", "jaw",
@@ -252,7 +259,7 @@ def build(lm):
           mirrored(m["left-ear-protrusion"]["points"]))
     macro("ear-size", "Ears bigger / smaller", "Ears", "both-ears",
           both(scale(P["ear"] + [-0.15, 0, 0], 0.3, 0.45)))
-    macro("ear-lobe", "Ear lobes longer / shorter", "Ears", "both-ears",
+    macro("ear-lobe", "Ear lobes longer / shorter", "Ears", "ear-lobes",
           both(shift(P["ear-lobe"], (0, -1, 0), 0.1, 0.16)), ("Above", 0.9))
     cover(a, m)
     return a, m
@@ -396,11 +403,42 @@ def library():
 BORDER = 0.003
 
 
+def partner(name):
+    """The mirror partner's name: left-X <-> right-X, else the name itself."""
+    for a, b in (("left-", "right-"), ("right-", "left-")):
+        if name.startswith(a):
+            return b + name[len(a):]
+    return name
+
+
+def mirror_invariant(items, others, mirror_item):
+    """True when every item's mirror image is in `others` and vice versa."""
+    key = lambda x: repr(sorted(x.items()))  # noqa: E731
+    return (len(items) == len(others)
+            and sorted(key(mirror_item(x)) for x in items) == sorted(key(y) for y in others))
+
+
+def check_mirror(areas, macros):
+    """Every macro and area is the exact mirror image of its partner (or of itself)."""
+    ok = True
+    for name, m in macros.items():
+        other = macros[partner(name)]
+        if not mirror_invariant(m["points"], other["points"], lambda p: mirrored([p])[0]):
+            print(f"{name}: not the mirror image of {partner(name)}")
+            ok = False
+    for name, shapes in areas.items():
+        if not mirror_invariant(shapes, areas[partner(name)], mirror_shape):
+            print(f"area {name}: not the mirror image of {partner(name)}")
+            ok = False
+    return ok
+
+
 def check(areas, macros, welded, tris):
-    """Numpy self-checks: zero at 0, no step at area borders, no flipped triangles, visible."""
+    """Numpy self-checks: mirror symmetry, no step at area borders, no flipped triangles,
+    a visible change at both ends of the range."""
     from ffsd import evaluate_points, region_members
     n = len(welded)
-    ok = True
+    ok = check_mirror(areas, macros)
     for name in sorted(macros):
         m = macros[name]
         members = region_members(areas[m["area"]], welded)

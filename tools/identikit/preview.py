@@ -35,7 +35,7 @@ def framing(name, macro, lm):
         if name.endswith("ear-protrusion"):
             return "back", (X0, 1.3, 0.0), 2.2
         return "left", (X0, 1.25, 0.0), 1.1
-    if name.startswith("forehead") or name == "brow-ridge":
+    if name in ("forehead-slope", "forehead-height", "brow-ridge"):
         return "side", (X0, 1.9, 1.7), 1.5
     if name in SIDE:
         return "side", (X0, 0.9, 1.9), 1.5

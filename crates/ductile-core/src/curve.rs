@@ -214,6 +214,27 @@ impl CurveEvaluator {
         })
     }
 
+    /// `C'(t)` from the hodograph: `C'(t) = Σᵢ Mᵢ(t) cᵢ (Pᵢ₊₁ − Pᵢ)` with the segment basis
+    /// `Mᵢ` of [`CurveEvaluator::segment_weights`] and `cᵢ = n` (Bézier, degree `n`) or
+    /// `cᵢ = p / (u_{i+p+1} − u_{i+1})` (B-spline, degree `p`). Same value as
+    /// [`CurveEvaluator::point_and_derivative`], without allocating.
+    #[must_use]
+    pub fn derivative(&self, ctrl: &[Vec3], t: f32) -> Vec3 {
+        let m = self.segment_weights(t);
+        let p = self.degree();
+        (0..m.len).fold(Vec3::ZERO, |acc, k| {
+            let i = m.first + k;
+            let c = match &self.knots {
+                None => p as f32,
+                Some(kv) => {
+                    let span = kv.knots()[i + p + 1] - kv.knots()[i + 1];
+                    if span > 0.0 { p as f32 / span } else { 0.0 }
+                }
+            };
+            acc + (ctrl[i + 1] - ctrl[i]) * (c * m.values[k])
+        })
+    }
+
     /// The parameter of the point of the curve closest to `x`: the closest point of the
     /// indexed polyline `samples` (from [`CurveEvaluator::samples`]), refined by
     /// Gauss–Newton steps `t ← t − (C − x)·C' / |C'|²` clamped to `[0, 1]` and kept only
@@ -225,7 +246,7 @@ impl CurveEvaluator {
         let mut t = ((s as f32 + f) * step).clamp(0.0, 1.0);
         let mut best = self.point(ctrl, t).distance_squared(x);
         for _ in 0..REFINE_STEPS {
-            let (c, dc) = self.point_and_derivative(ctrl, t);
+            let (c, dc) = (self.point(ctrl, t), self.derivative(ctrl, t));
             let l2 = dc.length_squared();
             if l2 <= f32::EPSILON * f32::EPSILON {
                 break;
@@ -321,12 +342,17 @@ impl CurveTool {
 }
 
 /// Bind of a [`CurveTool`]: per welded vertex (indexed by vertex number; only active ones
-/// are meaningful) the rest parameter `t` and offset `o = x − C_P(t)`.
+/// are meaningful) the rest parameter `t`, the offset `o = x − C_P(t)` and the non-zero
+/// basis functions at `t` (point basis, then segment basis: `2p + 1` values per vertex).
 #[derive(Debug, Clone)]
 pub struct CurveBind {
     evaluator: CurveEvaluator,
     params: Vec<f32>,
     offsets: Vec<Vec3>,
+    /// First point index and first segment index of the non-zero functions.
+    firsts: Vec<(u32, u32)>,
+    /// `degree + 1` point weights then `degree` segment weights per vertex.
+    weights: Vec<f32>,
 }
 
 impl CurveBind {
@@ -360,23 +386,35 @@ impl Deformer for CurveTool {
         let evaluator = CurveEvaluator::new(self.basis, self.rest.len(), "curve tool")?;
         let samples = evaluator.samples(&self.rest);
         let n = input.positions.len();
+        let p = evaluator.degree();
+        let stride = 2 * p + 1;
         let mut params = vec![0.0; n];
         let mut offsets = vec![Vec3::ZERO; n];
+        let mut firsts = vec![(0, 0); n];
+        let mut weights = vec![0.0; n * stride];
         for &i in input.active {
-            let x = input.positions[i as usize];
+            let k = i as usize;
+            let x = input.positions[k];
             let (t, _) = evaluator.closest_parameter(&self.rest, &samples, x);
-            params[i as usize] = t;
-            offsets[i as usize] = x - evaluator.point(&self.rest, t);
+            params[k] = t;
+            offsets[k] = x - evaluator.point(&self.rest, t);
+            let (w, m) = (evaluator.point_weights(t), evaluator.segment_weights(t));
+            firsts[k] = (w.first as u32, m.first as u32);
+            weights[k * stride..k * stride + p + 1].copy_from_slice(&w.values[..=p]);
+            weights[k * stride + p + 1..(k + 1) * stride].copy_from_slice(&m.values[..p]);
         }
         Ok(CurveBind {
             evaluator,
             params,
             offsets,
+            firsts,
+            weights,
         })
     }
 
     fn deform(&self, bind: &CurveBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
-        let ev = &bind.evaluator;
+        let p = bind.evaluator.degree();
+        let stride = 2 * p + 1;
         let moves: Vec<Vec3> = self
             .deformed
             .iter()
@@ -389,18 +427,18 @@ impl Deformer for CurveTool {
             .map(|r| r - Mat3::IDENTITY)
             .collect();
         for (o, &i) in out.iter_mut().zip(active) {
-            let (t, off) = (bind.params[i as usize], bind.offsets[i as usize]);
-            let w = ev.point_weights(t);
+            let v = i as usize;
+            let (fp, fs) = (bind.firsts[v].0 as usize, bind.firsts[v].1 as usize);
+            let w = &bind.weights[v * stride..(v + 1) * stride];
             let mut d = Vec3::ZERO;
-            for k in 0..w.len {
-                d += moves[w.first + k] * w.values[k];
+            for k in 0..=p {
+                d += moves[fp + k] * w[k];
             }
-            let m = ev.segment_weights(t);
             let mut turn = Mat3::ZERO;
-            for k in 0..m.len {
-                turn += turns[m.first + k] * m.values[k];
+            for k in 0..p {
+                turn += turns[fs + k] * w[p + 1 + k];
             }
-            *o = positions[i as usize] + d + turn * off;
+            *o = positions[v] + d + turn * bind.offsets[v];
         }
     }
 
@@ -509,6 +547,11 @@ pub(crate) mod tests {
                 }
                 assert!(
                     (d - dc).length() < 1e-3 * dc.length().max(1.0),
+                    "{basis:?} t={t}"
+                );
+                let e = ev.derivative(&ctrl, t);
+                assert!(
+                    (e - dc).length() < 1e-3 * dc.length().max(1.0),
                     "{basis:?} t={t}"
                 );
             }

@@ -2,7 +2,7 @@
 //!
 //! Evaluation of one layer, given its input positions `p` (welded, mesh space):
 //!
-//! 1. skip it when it is disabled or its weight is 0;
+//! 1. skip it when it is disabled, its weight is 0 or its tool is the identity;
 //! 2. compute its [`Mask`] (influence; all vertices when it has none);
 //! 3. bind the tool on the input ([`LayerBinding::bind`]);
 //! 4. deform the active vertices, then blend: `p'ᵢ = pᵢ + weight · wᵢ · (D(pᵢ) − pᵢ)`; when
@@ -53,10 +53,11 @@ impl Layer {
         }
     }
 
-    /// True when evaluating the layer cannot change anything.
+    /// True when evaluating the layer cannot change anything: it is disabled, has weight 0,
+    /// or its tool is the identity ([`Tool::is_identity`]).
     #[must_use]
     pub fn is_inert(&self) -> bool {
-        !self.enabled || self.weight == 0.0
+        !self.enabled || self.weight == 0.0 || self.tool.is_identity()
     }
 
     /// Checks the weight, the influence and the tool.

@@ -103,6 +103,17 @@ impl Tool {
         }
     }
 
+    /// True when the tool is exactly the identity map whatever the mesh (an FFSD tool whose
+    /// every effective γ is 0, such as a macro at value 0), so the stack may skip it.
+    #[must_use]
+    pub fn is_identity(&self) -> bool {
+        match self {
+            Tool::Ffsd(t) => t.gain == 0.0 || t.points.iter().all(|p| p.gamma == 0.0),
+            #[allow(unreachable_patterns)]
+            _ => false,
+        }
+    }
+
     /// See [`Deformer::validate`].
     pub fn validate(&self, what: &str) -> Result<()> {
         match self {

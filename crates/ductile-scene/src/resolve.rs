@@ -1,6 +1,8 @@
 //! From the document to core's evaluable [`Stack`]: world transforms, tools and volumes in
 //! mesh space, areas as welded vertex sets.
 
+use std::collections::HashMap;
+
 use glam::Affine3A;
 
 use ductile_core::influence::{Influence, Volume};
@@ -70,10 +72,12 @@ impl Document {
         resolve_area(def, rest, &format!("mesh '{mesh}', area '{area}'"))
     }
 
-    /// Resolves the stack of mesh `mesh` against its rest mesh.
+    /// Resolves the stack of mesh `mesh` against its rest mesh. Each area is resolved once,
+    /// however many layers use it.
     pub fn resolve_stack(&self, mesh: &str, rest: &RestMesh) -> Result<Stack> {
         let node = self.mesh(mesh)?;
         let mut layers = Vec::with_capacity(node.stack.len());
+        let mut areas: HashMap<&str, Vec<u32>> = HashMap::new();
         for (i, spec) in node.stack.iter().enumerate() {
             let tool_node = self.node(&spec.tool).map_err(|_| SceneError::UnknownTool {
                 mesh: mesh.to_owned(),

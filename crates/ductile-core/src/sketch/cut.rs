@@ -10,25 +10,29 @@
 //! deformable region is bounded by only one partition. All other parts will be rigidly
 //! transformed.").
 //!
-//! The max-flow/min-cut solver is `pathfinding`'s Edmonds–Karp on integer capacities.
+//! The max-flow/min-cut solver is `petgraph`'s Dinic algorithm on integer capacities.
 
-use std::collections::{BTreeMap, HashMap, HashSet};
+use std::collections::{BTreeMap, HashMap};
 
 use glam::{Vec2, Vec3};
-use pathfinding::directed::edmonds_karp::edmonds_karp_sparse;
+use petgraph::Directed;
+use petgraph::Direction;
+use petgraph::algo::dinics;
+use petgraph::graph::{Graph, NodeIndex};
+use petgraph::visit::EdgeRef;
 
 use crate::error::{CoreError, Result};
 use crate::mesh::Topology;
 use crate::sketch::camera::Camera;
 use crate::sketch::partition::Partition;
-use crate::sketch::roi::{VertexGraph, edge_key};
+use crate::sketch::roi::{VertexGraph, check_positions, edge_key, find};
 
 /// Screen-space half-width of the fuzzy region around a cut line, in pixels (Kho & Garland
 /// §4.2.1: "we typically adopt a 5 pixel distance limit").
 pub const FUZZY_DISTANCE_PX: f32 = 5.0;
 
 /// Largest integer capacity of a dual edge; weights are scaled so the heaviest edge gets
-/// this value (Edmonds–Karp needs an ordered integer type; 10⁶ keeps the relative rounding
+/// this value (integer capacities make the residual test exact; 10⁶ keeps the rounding
 /// error of every weight below 10⁻⁶ of the largest).
 const CAPACITY_SCALE: f64 = 1.0e6;
 
@@ -69,8 +73,8 @@ pub struct MeshCut {
 ///    `(π − θ)·ℓ` — the dihedral angle between the faces (π on a flat area, smaller at a
 ///    crease of either sign) times the edge length. Bordering triangles connect to the
 ///    source or the sink (by the plane side of their centroid) with unbounded capacity.
-/// 4. Minimum cut (Edmonds–Karp): region triangles reachable from the source after the
-///    maximum flow are on the positive side. The primal edges between the two sides form
+/// 4. Minimum cut (maximum flow by Dinic's algorithm): region triangles reachable from the
+///    source in the residual network are on the positive side. The primal edges between the two sides form
 ///    the boundary.
 /// 5. Vertices: a flood fill over the mesh that may not pass through boundary vertices,
 ///    from the off-cut corners of the triangles on each side.
@@ -104,17 +108,8 @@ pub fn cut_with_line(
             expected: "must be at least 1 pixel",
         });
     }
+    check_positions("cut line", positions, topology)?;
     let n = topology.vertex_count();
-    if positions.len() != n {
-        return Err(CoreError::Degenerate {
-            what: "cut line".to_owned(),
-            problem: format!(
-                "{} positions given for {} welded vertices",
-                positions.len(),
-                n
-            ),
-        });
-    }
     let (point, normal) = cut_plane(camera, line_px)?;
     let unit = dir / len;
 
@@ -188,13 +183,6 @@ pub fn cut_with_line(
     // Connected fuzzy regions (union-find over fuzzy-fuzzy edges).
     let local: HashMap<u32, usize> = fuzzy.iter().enumerate().map(|(i, &t)| (t, i)).collect();
     let mut parent: Vec<usize> = (0..fuzzy.len()).collect();
-    fn find(parent: &mut [usize], mut x: usize) -> usize {
-        while parent[x] != x {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        x
-    }
     let mut keys: Vec<u64> = edge_tris.keys().copied().collect();
     keys.sort_unstable();
     for key in &keys {
@@ -321,45 +309,53 @@ pub fn cut_with_line(
         .map(|d| d.2)
         .fold(0.0f64, f64::max)
         .max(f64::MIN_POSITIVE);
-    let caps: Vec<i64> = dual
+    let caps: Vec<u64> = dual
         .iter()
-        .map(|d| ((d.2 / max_w * CAPACITY_SCALE).round() as i64).max(1))
+        .map(|d| ((d.2 / max_w * CAPACITY_SCALE).round() as u64).max(1))
         .collect();
-    let infinite: i64 = caps.iter().sum::<i64>() + 1;
+    let infinite: u64 = caps.iter().sum::<u64>() + 1;
     let node_count = node_tri.len() + 2;
-    let vertices: Vec<usize> = (0..node_count).collect();
-    let mut edges: Vec<((usize, usize), i64)> = Vec::with_capacity(2 * dual.len());
+    let mut network: Graph<(), u64, Directed, u32> =
+        Graph::with_capacity(node_count, 2 * dual.len() + border_side.len());
+    let ids: Vec<NodeIndex<u32>> = (0..node_count).map(|_| network.add_node(())).collect();
     for (d, &c) in dual.iter().zip(&caps) {
-        edges.push(((d.0, d.1), c));
-        edges.push(((d.1, d.0), c));
+        network.add_edge(ids[d.0], ids[d.1], c);
+        network.add_edge(ids[d.1], ids[d.0], c);
     }
     for (&node, &side) in &border_side {
         if side {
-            edges.push(((0, node), infinite));
+            network.add_edge(ids[0], ids[node], infinite);
         } else {
-            edges.push(((node, 1), infinite));
+            network.add_edge(ids[node], ids[1], infinite);
         }
     }
-    let (_, _, cut_edges) = edmonds_karp_sparse(&vertices, &0, &1, edges.iter().copied());
-    // Source side: reachable from the source over dual edges not in the minimum cut.
-    let cut_set: HashSet<(usize, usize)> = cut_edges.iter().map(|e| e.0).collect();
-    let mut adjacency: Vec<Vec<usize>> = vec![Vec::new(); node_count];
-    for &((u, w), _) in &edges {
-        if !cut_set.contains(&(u, w)) && !cut_set.contains(&(w, u)) {
-            adjacency[u].push(w);
-            adjacency[w].push(u);
-        }
-    }
+    let (_, flows) = dinics(&network, ids[0], ids[1]);
+    // Source side: reachable from the source in the residual network.
     let mut source_side = vec![false; node_count];
-    let mut stack = vec![0usize];
+    let mut stack = vec![ids[0]];
     source_side[0] = true;
     while let Some(u) = stack.pop() {
-        for &w in &adjacency[u] {
-            if w != 1 && !source_side[w] {
-                source_side[w] = true;
+        let forward = network
+            .edges_directed(u, Direction::Outgoing)
+            .filter(|e| *e.weight() > flows[e.id().index()])
+            .map(|e| e.target());
+        let backward = network
+            .edges_directed(u, Direction::Incoming)
+            .filter(|e| flows[e.id().index()] > 0)
+            .map(|e| e.source());
+        let next: Vec<NodeIndex<u32>> = forward.chain(backward).collect();
+        for w in next {
+            if !source_side[w.index()] {
+                source_side[w.index()] = true;
                 stack.push(w);
             }
         }
+    }
+    if source_side[1] {
+        return Err(CoreError::Cut {
+            what: "cut line".to_owned(),
+            problem: "the maximum flow did not saturate a cut (internal error)".to_owned(),
+        });
     }
     // Boundary edges: dual edges whose ends lie on different sides.
     let mut boundary_edges: Vec<[u32; 2]> = dual
@@ -459,7 +455,8 @@ pub fn cut_plane(camera: &Camera, line_px: [Vec2; 2]) -> Result<(Vec3, Vec3)> {
 ///
 /// # Errors
 /// [`CoreError::StrokeTooShort`] for an empty curve, [`CoreError::NotFinite`] for a bad curve
-/// node, [`CoreError::NoSuchVertex`] when `base` names a vertex that does not exist and
+/// node, [`CoreError::Degenerate`] when `positions` does not match the topology,
+/// [`CoreError::NoSuchVertex`] when `base` names a vertex that does not exist and
 /// [`CoreError::Cut`] when the region to split is empty.
 pub fn combine_cuts(
     positions: &[Vec3],
@@ -468,6 +465,7 @@ pub fn combine_cuts(
     cuts: &[MeshCut],
     curve: &[Vec3],
 ) -> Result<Partition> {
+    check_positions("combining cuts", positions, topology)?;
     let n = topology.vertex_count();
     if curve.is_empty() {
         return Err(CoreError::StrokeTooShort {
@@ -740,6 +738,33 @@ mod tests {
             y < 3.0 && y > 0.99
         }));
         assert!(part.roi.iter().any(|&v| pos[v as usize].y > 2.7));
+    }
+
+    #[test]
+    fn perspective_cut_is_a_ring_around_the_cylinder() {
+        let (p, t) = cylinder(24, 16, 0.5, 4.0);
+        let (pos, topo) = welded(p, &t);
+        let cam = Camera {
+            eye: Vec3::new(0.0, 2.0, 6.0),
+            target: Vec3::new(0.0, 2.0, 0.0),
+            up: Vec3::Y,
+            projection: Projection::Perspective { fov_y: 0.9 },
+            near: 0.1,
+            far: 100.0,
+            viewport: Vec2::new(400.0, 400.0),
+        };
+        // Right to left this time: the positive side (right of the direction) is above.
+        let a = cam.project(Vec3::new(1.0, 2.6, 0.5)).unwrap().0;
+        let b = cam.project(Vec3::new(-1.0, 2.6, 0.5)).unwrap().0;
+        let cut = cut_with_line(&cam, [a, b], &pos, &topo).unwrap();
+        assert_eq!(cut.boundary.len(), 24);
+        let ring_y = pos[cut.boundary[0] as usize].y;
+        assert!(cut.boundary.iter().all(|&v| pos[v as usize].y == ring_y));
+        assert!((ring_y - 2.6).abs() < 0.3, "{ring_y}");
+        assert!(cut.positive.iter().all(|&v| pos[v as usize].y > ring_y));
+        assert!(cut.negative.iter().all(|&v| pos[v as usize].y < ring_y));
+        // The plane contains the eye.
+        assert!(cut.normal.dot(cam.eye - cut.point).abs() < 1e-3);
     }
 
     #[test]

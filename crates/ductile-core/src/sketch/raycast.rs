@@ -3,7 +3,9 @@
 //! Sketching (Kho & Garland 2005, §4.1 and §5.2) needs the first hit of the ray through a
 //! stroke point, and for twisting the first *two* hits (front and back face). [`Bvh`] is a
 //! compact binary BVH over triangles built top-down with the surface area heuristic (SAH)
-//! evaluated on 16 centroid bins per axis, with at most [`MAX_LEAF`] triangles per leaf.
+//! evaluated on 16 centroid bins along the axis of largest centroid extent (large nodes are
+//! binned on an even sample of at most 4096 triangles), with at most [`MAX_LEAF`] triangles
+//! per leaf.
 //!
 //! Why not a crate: `bvh` depends on nalgebra and `obvhs` 0.4 requires glam ≥ 0.33 (the
 //! workspace uses 0.32) plus `rdst`, `bytemuck` and `half`; a 200-line builder is cheaper
@@ -18,7 +20,10 @@ use crate::sketch::camera::Ray;
 /// Most triangles in a leaf.
 pub const MAX_LEAF: usize = 4;
 
-/// Number of centroid bins per axis for the SAH split search.
+/// Ranges with at least this many triangles are split and their halves built in parallel.
+const PARALLEL_MIN: usize = 32_768;
+
+/// Number of centroid bins for the SAH split search.
 const BINS: usize = 16;
 
 /// One ray–triangle intersection.
@@ -99,6 +104,23 @@ impl Aabb {
     }
 }
 
+/// A triangle while building: its box and original index (kept together, 28 bytes, so the
+/// in-place partitioning streams memory sequentially). The split key is the box centre
+/// (stored doubled as `min + max`, see [`Prim::centroid`]), as usual for binned builders.
+#[derive(Debug, Clone, Copy)]
+struct Prim {
+    bounds: Aabb,
+    id: u32,
+}
+
+impl Prim {
+    /// Twice the centre of the triangle's box (the factor 2 does not change any split).
+    #[inline]
+    fn centroid(&self) -> Vec3 {
+        self.bounds.min + self.bounds.max
+    }
+}
+
 impl Bvh {
     /// Builds the hierarchy over `triangles` (indices into `positions`).
     ///
@@ -106,83 +128,40 @@ impl Bvh {
     /// [`CoreError::IndexOutOfRange`] when a triangle refers to a missing position and
     /// [`CoreError::NotFinite`] when a referenced position is NaN or infinite.
     pub fn build(positions: &[Vec3], triangles: &[[u32; 3]]) -> Result<Self> {
-        let mut corners = Vec::with_capacity(triangles.len());
+        let mut prims: Vec<Prim> = Vec::with_capacity(triangles.len());
         for (i, t) in triangles.iter().enumerate() {
-            let mut c = [Vec3::ZERO; 3];
-            for k in 0..3 {
+            let mut bounds = Aabb::EMPTY;
+            for &v in t {
                 let p = positions
-                    .get(t[k] as usize)
-                    .ok_or(CoreError::IndexOutOfRange {
+                    .get(v as usize)
+                    .ok_or_else(|| CoreError::IndexOutOfRange {
                         what: "ray-casting hierarchy".to_owned(),
                         triangle: i,
-                        index: t[k],
+                        index: v,
                         vertices: positions.len(),
                     })?;
                 if !p.is_finite() {
                     return Err(CoreError::NotFinite {
-                        what: format!("ray-casting hierarchy: position of vertex {}", t[k]),
+                        what: format!("ray-casting hierarchy: position of vertex {v}"),
                         value: format!("{p}"),
                     });
                 }
-                c[k] = *p;
+                bounds.grow_point(*p);
             }
-            corners.push(c);
-        }
-        let n = corners.len();
-        let mut boxes = Vec::with_capacity(n);
-        let mut centroids = Vec::with_capacity(n);
-        for c in &corners {
-            boxes.push(Aabb {
-                min: c[0].min(c[1]).min(c[2]),
-                max: c[0].max(c[1]).max(c[2]),
+            prims.push(Prim {
+                bounds,
+                id: i as u32,
             });
-            centroids.push((c[0] + c[1] + c[2]) / 3.0);
         }
-        let mut order: Vec<u32> = (0..n as u32).collect();
-        let mut nodes = Vec::with_capacity(2 * n.div_ceil(MAX_LEAF).max(1));
-        nodes.push(Node {
-            min: Vec3::ZERO,
-            max: Vec3::ZERO,
-            first: 0,
-            count: n as u32,
-        });
-        // Work list of (node index, start, end) ranges of `order`.
-        let mut stack = vec![(0usize, 0usize, n)];
-        while let Some((node, start, end)) = stack.pop() {
-            let mut bounds = Aabb::EMPTY;
-            let mut cbounds = Aabb::EMPTY;
-            for &i in &order[start..end] {
-                bounds.grow(&boxes[i as usize]);
-                cbounds.grow_point(centroids[i as usize]);
-            }
-            nodes[node].min = bounds.min;
-            nodes[node].max = bounds.max;
-            nodes[node].first = start as u32;
-            nodes[node].count = (end - start) as u32;
-            if end - start <= MAX_LEAF {
-                continue;
-            }
-            let Some(mid) = sah_split(&mut order[start..end], &boxes, &centroids, &cbounds) else {
-                continue;
-            };
-            let mid = start + mid;
-            let left = nodes.len();
-            nodes.push(nodes[node]);
-            nodes.push(nodes[node]);
-            nodes[node].first = left as u32;
-            nodes[node].count = 0;
-            stack.push((left, start, mid));
-            stack.push((left + 1, mid, end));
-        }
-        if n == 0 {
-            nodes[0].min = Vec3::splat(f32::INFINITY);
-            nodes[0].max = Vec3::splat(f32::NEG_INFINITY);
-        }
-        let corners_sorted = order.iter().map(|&i| corners[i as usize]).collect();
+        let (bounds, cbounds) = range_bounds(&prims);
+        let nodes = build_nodes(&mut prims, 0, bounds, cbounds, PARALLEL_MIN);
         Ok(Self {
             nodes,
-            corners: corners_sorted,
-            ids: order,
+            corners: prims
+                .iter()
+                .map(|p| triangles[p.id as usize].map(|v| positions[v as usize]))
+                .collect(),
+            ids: prims.iter().map(|p| p.id).collect(),
         })
     }
 
@@ -226,16 +205,10 @@ impl Bvh {
         }
         let inv = ray.direction.recip();
         let mut t_max = f32::INFINITY;
-        let mut stack = [0u32; 64];
-        let mut top = 0usize;
-        if slab(&self.nodes[0], ray.origin, inv, t_max).is_none() {
-            return;
-        }
-        stack[top] = 0;
-        top += 1;
-        while top > 0 {
-            top -= 1;
-            let node = &self.nodes[stack[top] as usize];
+        let mut stack: Vec<u32> = Vec::with_capacity(64);
+        stack.push(0);
+        while let Some(index) = stack.pop() {
+            let node = &self.nodes[index as usize];
             if slab(node, ray.origin, inv, t_max).is_none() {
                 continue;
             }
@@ -260,133 +233,260 @@ impl Bvh {
             let (a, b) = (node.first, node.first + 1);
             let ta = slab(&self.nodes[a as usize], ray.origin, inv, t_max);
             let tb = slab(&self.nodes[b as usize], ray.origin, inv, t_max);
-            // Push the farther child first so the nearer one is visited next. The depth of
-            // a median-or-better split tree stays far below 64 for any realistic mesh; if it
-            // did not, the deeper subtrees would be visited through a heap fallback.
-            let mut push = |i: u32| {
-                if top < stack.len() {
-                    stack[top] = i;
-                    top += 1;
-                    true
-                } else {
-                    false
-                }
-            };
-            let pushed = match (ta, tb) {
-                (Some(x), Some(y)) if x <= y => push(b) && push(a),
-                (Some(_), Some(_)) => push(a) && push(b),
-                (Some(_), None) => push(a),
-                (None, Some(_)) => push(b),
-                (None, None) => true,
-            };
-            if !pushed {
-                // Extremely deep tree: finish the remaining subtrees by brute force.
-                for k in 0..self.corners.len() {
-                    if let Some((t, bary)) = triangle_hit(ray, &self.corners[k])
-                        && t <= t_max
-                    {
-                        visit(
-                            Hit {
-                                t,
-                                triangle: self.ids[k],
-                                barycentric: bary,
-                            },
-                            &mut t_max,
-                        );
-                    }
-                }
-                return;
+            // Push the farther child first so that the nearer one is visited next.
+            match (ta, tb) {
+                (Some(x), Some(y)) if x <= y => stack.extend([b, a]),
+                (Some(_), Some(_)) => stack.extend([a, b]),
+                (Some(_), None) => stack.push(a),
+                (None, Some(_)) => stack.push(b),
+                (None, None) => {}
             }
         }
     }
 }
 
-/// Binned SAH split of `order` (triangle ids) in place; returns the split position, or
-/// `None` when no split is better than a leaf and the range is small enough, or when all
-/// centroids coincide. Falls back to a median split on the longest axis when SAH finds no
-/// useful plane but the range is too big for a leaf.
-fn sah_split(
-    order: &mut [u32],
-    boxes: &[Aabb],
-    centroids: &[Vec3],
-    cbounds: &Aabb,
-) -> Option<usize> {
-    let extent = cbounds.max - cbounds.min;
-    let n = order.len();
-    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bin)
-    for axis in 0..3 {
-        if extent[axis] <= 0.0 {
+/// Most triangles binned when searching a split: larger nodes are sub-sampled evenly (the
+/// SAH cost curve of a large node is smooth, so a sample finds practically the same plane
+/// while the build stays linear per level with a small constant).
+const MAX_BINNED: usize = 4096;
+
+/// Builds the nodes over `prims` (which start at `offset` in the final primitive order),
+/// root first. Ranges of at least `parallel_min` primitives are split once and their two
+/// halves built in parallel (rayon), smaller ones sequentially.
+fn build_nodes(
+    prims: &mut [Prim],
+    offset: usize,
+    bounds: Aabb,
+    cbounds: Aabb,
+    parallel_min: usize,
+) -> Vec<Node> {
+    let n = prims.len();
+    if n >= parallel_min.max(2 * MAX_LEAF)
+        && let Some(split) = sah_split(prims, &cbounds)
+    {
+        let (lp, rp) = prims.split_at_mut(split.mid);
+        let (left, right) = rayon::join(
+            || build_nodes(lp, offset, split.left, split.left_centroids, parallel_min),
+            || {
+                build_nodes(
+                    rp,
+                    offset + split.mid,
+                    split.right,
+                    split.right_centroids,
+                    parallel_min,
+                )
+            },
+        );
+        return join_subtrees(bounds, left, right);
+    }
+    let mut nodes = Vec::with_capacity(2 * n.div_ceil(MAX_LEAF).max(1));
+    nodes.push(Node {
+        min: bounds.min,
+        max: bounds.max,
+        first: offset as u32,
+        count: n as u32,
+    });
+    // Work list: node index, range of `prims`, and the centroid bounds of that range (the
+    // node's own box is already stored; children's boxes are gathered while splitting).
+    let mut stack = vec![(0usize, 0usize, n, cbounds)];
+    while let Some((node, start, end, cbounds)) = stack.pop() {
+        if end - start <= MAX_LEAF {
             continue;
         }
-        let scale = BINS as f32 / extent[axis];
-        let bin_of = |c: Vec3| (((c[axis] - cbounds.min[axis]) * scale) as usize).min(BINS - 1);
-        let mut bins = [(Aabb::EMPTY, 0usize); BINS];
-        for &i in order.iter() {
-            let b = bin_of(centroids[i as usize]);
-            bins[b].0.grow(&boxes[i as usize]);
-            bins[b].1 += 1;
+        let Some(split) = sah_split(&mut prims[start..end], &cbounds) else {
+            continue;
+        };
+        let mid = start + split.mid;
+        let left = nodes.len();
+        for (bounds, first, count) in [
+            (split.left, start, split.mid),
+            (split.right, mid, end - mid),
+        ] {
+            nodes.push(Node {
+                min: bounds.min,
+                max: bounds.max,
+                first: (offset + first) as u32,
+                count: count as u32,
+            });
         }
-        // Sweep from the right to get the cost of every right part.
-        let mut right_area = [0.0f32; BINS];
-        let mut right_count = [0usize; BINS];
-        let mut acc = Aabb::EMPTY;
-        let mut cnt = 0;
-        for b in (1..BINS).rev() {
-            acc.grow(&bins[b].0);
-            cnt += bins[b].1;
-            right_area[b] = acc.half_area();
-            right_count[b] = cnt;
-        }
-        let mut acc = Aabb::EMPTY;
-        let mut cnt = 0;
-        for b in 0..BINS - 1 {
-            acc.grow(&bins[b].0);
-            cnt += bins[b].1;
-            if cnt == 0 || right_count[b + 1] == 0 {
-                continue;
-            }
-            let cost = acc.half_area() * cnt as f32 + right_area[b + 1] * right_count[b + 1] as f32;
-            if best.is_none_or(|(c, _, _)| cost < c) {
-                best = Some((cost, axis, b));
-            }
-        }
+        nodes[node].first = left as u32;
+        nodes[node].count = 0;
+        stack.push((left, start, mid, split.left_centroids));
+        stack.push((left + 1, mid, end, split.right_centroids));
     }
-    if let Some((_, axis, bin)) = best {
-        let scale = BINS as f32 / extent[axis];
-        let mut mid = 0;
-        for k in 0..n {
-            let c = centroids[order[k] as usize];
-            if ((((c[axis] - cbounds.min[axis]) * scale) as usize).min(BINS - 1)) <= bin {
-                order.swap(k, mid);
-                mid += 1;
-            }
+    nodes
+}
+
+/// A root over two subtrees built separately: `[root, left root, right root, rest of left,
+/// rest of right]`, with the interior nodes' child indices renumbered (children stay
+/// adjacent).
+fn join_subtrees(bounds: Aabb, left: Vec<Node>, right: Vec<Node>) -> Vec<Node> {
+    let l = left.len() as u32;
+    let map_left = |i: u32| if i == 0 { 1 } else { i + 2 };
+    let map_right = |i: u32| if i == 0 { 2 } else { i + l + 1 };
+    let remap = |node: &Node, map: &dyn Fn(u32) -> u32| {
+        let mut out = *node;
+        if out.count == 0 {
+            out.first = map(out.first);
         }
-        if mid > 0 && mid < n {
-            return Some(mid);
-        }
-    }
-    // All centroids in one bin (or coincident): median split on the longest axis.
-    let axis = extent.max_position();
-    if extent[axis] <= 0.0 && n <= 4 * MAX_LEAF {
-        return None;
-    }
-    let mid = n / 2;
-    order.select_nth_unstable_by(mid, |&a, &b| {
-        centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
+        out
+    };
+    let mut out = Vec::with_capacity(1 + left.len() + right.len());
+    out.push(Node {
+        min: bounds.min,
+        max: bounds.max,
+        first: 1,
+        count: 0,
     });
-    Some(mid)
+    out.push(remap(&left[0], &map_left));
+    out.push(remap(&right[0], &map_right));
+    out.extend(left[1..].iter().map(|n| remap(n, &map_left)));
+    out.extend(right[1..].iter().map(|n| remap(n, &map_right)));
+    out
+}
+
+/// Boxes of a range of primitives: `(bounds of the triangles, bounds of the centroids)`.
+fn range_bounds(prims: &[Prim]) -> (Aabb, Aabb) {
+    let mut bounds = Aabb::EMPTY;
+    let mut cbounds = Aabb::EMPTY;
+    for p in prims {
+        bounds.grow(&p.bounds);
+        cbounds.grow_point(p.centroid());
+    }
+    (bounds, cbounds)
+}
+
+/// A split of a range: the position and both children's triangle and centroid boxes.
+struct Split {
+    mid: usize,
+    left: Aabb,
+    right: Aabb,
+    left_centroids: Aabb,
+    right_centroids: Aabb,
+}
+
+/// Binned SAH split of `prims` in place along the axis of largest centroid extent;
+/// returns the split with both children's boxes (gathered in the partitioning pass), or
+/// `None` when all centroids coincide and the range is small enough for one (oversized)
+/// leaf. Falls back to a median split when no bin boundary separates the centroids.
+fn sah_split(prims: &mut [Prim], cbounds: &Aabb) -> Option<Split> {
+    let extent = cbounds.max - cbounds.min;
+    let n = prims.len();
+    let axis = extent.max_position();
+    if extent[axis] <= 0.0 {
+        if n <= 4 * MAX_LEAF {
+            return None;
+        }
+        // Coincident centroids: any halving terminates.
+        return Some(split_at(prims, n / 2));
+    }
+    let stride = n.div_ceil(MAX_BINNED).max(1);
+    let scale = BINS as f32 / extent[axis];
+    let lo = cbounds.min[axis];
+    let bin_of = |p: &Prim| (((p.centroid()[axis] - lo) * scale) as usize).min(BINS - 1);
+    let mut bins = [(Aabb::EMPTY, 0usize); BINS];
+    for p in prims.iter().step_by(stride) {
+        let b = bin_of(p);
+        bins[b].0.grow(&p.bounds);
+        bins[b].1 += 1;
+    }
+    // Sweep from the right to get the cost of every right part.
+    let mut right_area = [0.0f32; BINS];
+    let mut right_count = [0usize; BINS];
+    let mut acc = Aabb::EMPTY;
+    let mut cnt = 0;
+    for b in (1..BINS).rev() {
+        acc.grow(&bins[b].0);
+        cnt += bins[b].1;
+        right_area[b] = acc.half_area();
+        right_count[b] = cnt;
+    }
+    let mut best: Option<(f32, usize)> = None;
+    let mut acc = Aabb::EMPTY;
+    let mut cnt = 0;
+    for b in 0..BINS - 1 {
+        acc.grow(&bins[b].0);
+        cnt += bins[b].1;
+        if cnt == 0 || right_count[b + 1] == 0 {
+            continue;
+        }
+        let cost = acc.half_area() * cnt as f32 + right_area[b + 1] * right_count[b + 1] as f32;
+        if best.is_none_or(|(c, _)| cost < c) {
+            best = Some((cost, b));
+        }
+    }
+    let Some((_, bin)) = best else {
+        return Some(split_at_median(prims, axis));
+    };
+    let mut split = Split {
+        mid: 0,
+        left: Aabb::EMPTY,
+        right: Aabb::EMPTY,
+        left_centroids: Aabb::EMPTY,
+        right_centroids: Aabb::EMPTY,
+    };
+    for k in 0..n {
+        let p = prims[k];
+        if bin_of(&p) <= bin {
+            split.left.grow(&p.bounds);
+            split.left_centroids.grow_point(p.centroid());
+            prims.swap(k, split.mid);
+            split.mid += 1;
+        } else {
+            split.right.grow(&p.bounds);
+            split.right_centroids.grow_point(p.centroid());
+        }
+    }
+    if split.mid == 0 || split.mid == n {
+        return Some(split_at_median(prims, axis));
+    }
+    Some(split)
+}
+
+/// Median split along `axis`.
+fn split_at_median(prims: &mut [Prim], axis: usize) -> Split {
+    let mid = prims.len() / 2;
+    prims.select_nth_unstable_by(mid, |a, b| {
+        a.centroid()[axis].total_cmp(&b.centroid()[axis])
+    });
+    split_at(prims, mid)
+}
+
+/// Split at `mid` as the primitives are ordered now.
+fn split_at(prims: &[Prim], mid: usize) -> Split {
+    let (left, left_centroids) = range_bounds(&prims[..mid]);
+    let (right, right_centroids) = range_bounds(&prims[mid..]);
+    Split {
+        mid,
+        left,
+        right,
+        left_centroids,
+        right_centroids,
+    }
 }
 
 /// Slab test: the entry distance of the ray into the node's box if it enters before
-/// `t_max`.
+/// `t_max`. Conservative: the interval is widened by `1e-5` of its magnitude so that a hit
+/// exactly on a box face (a ray through a shared vertex) is never lost to rounding, and an
+/// axis the ray is parallel to (`0 · ∞ = NaN`) counts as inside when the origin lies within
+/// the slab.
 fn slab(node: &Node, origin: Vec3, inv: Vec3, t_max: f32) -> Option<f32> {
-    let t0 = (node.min - origin) * inv;
-    let t1 = (node.max - origin) * inv;
-    // `min`/`max` of glam ignore NaN from 0·∞ on the axis the ray is parallel to when the
-    // origin lies on a slab plane, which keeps the test conservative.
-    let near = t0.min(t1).max_element().max(0.0);
-    let far = t0.max(t1).min_element().min(t_max);
-    (near <= far).then_some(near)
+    let mut near = 0.0f32;
+    let mut far = t_max;
+    for a in 0..3 {
+        let t0 = (node.min[a] - origin[a]) * inv[a];
+        let t1 = (node.max[a] - origin[a]) * inv[a];
+        if t0.is_nan() || t1.is_nan() {
+            if origin[a] < node.min[a] || origin[a] > node.max[a] {
+                return None;
+            }
+            continue;
+        }
+        near = near.max(t0.min(t1));
+        far = far.min(t0.max(t1));
+    }
+    let pad = 1e-5 * near.abs().max(far.abs().min(f32::MAX)).max(1.0);
+    (near - pad <= far + pad).then_some(near)
 }
 
 /// Two-sided Möller–Trumbore ray–triangle test: `(t, (w0, w1, w2))` for a hit with
@@ -512,6 +612,54 @@ pub(crate) mod tests {
         };
         assert!(bvh.intersect(&ray).is_none());
         assert!(bvh.intersect_all(&ray).is_empty());
+    }
+
+    #[test]
+    fn parallel_build_finds_the_same_hits() {
+        let (p, t) = cylinder(24, 10, 0.5, 4.0);
+        let mut prims: Vec<Prim> = t
+            .iter()
+            .enumerate()
+            .map(|(i, tri)| {
+                let mut bounds = Aabb::EMPTY;
+                for &v in tri {
+                    bounds.grow_point(p[v as usize]);
+                }
+                Prim {
+                    bounds,
+                    id: i as u32,
+                }
+            })
+            .collect();
+        let (bounds, cbounds) = range_bounds(&prims);
+        // Split in parallel down to ranges of 16 triangles.
+        let nodes = build_nodes(&mut prims, 0, bounds, cbounds, 16);
+        let bvh = Bvh {
+            nodes,
+            corners: prims
+                .iter()
+                .map(|q| t[q.id as usize].map(|v| p[v as usize]))
+                .collect(),
+            ids: prims.iter().map(|q| q.id).collect(),
+        };
+        let mut sorted = bvh.ids.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..t.len() as u32).collect::<Vec<_>>());
+        for k in 0..200 {
+            let a = k as f32 * 0.37;
+            let origin = Vec3::new(3.0 * a.cos(), (k % 11) as f32 * 0.45 - 0.5, 3.0 * a.sin());
+            let target = Vec3::new(0.1 * a.sin(), (k % 7) as f32 * 0.6, 0.0);
+            let ray = Ray {
+                origin,
+                direction: (target - origin).normalize(),
+            };
+            let all: Vec<(f32, u32)> = bvh
+                .intersect_all(&ray)
+                .iter()
+                .map(|h| (h.t, h.triangle))
+                .collect();
+            assert_eq!(all, brute(&ray, &p, &t), "ray {k}");
+        }
     }
 
     proptest! {

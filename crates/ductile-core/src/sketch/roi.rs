@@ -151,6 +151,31 @@ impl VertexGraph {
     }
 }
 
+/// Root of `x` in a union–find forest, with path halving.
+pub(crate) fn find(parent: &mut [usize], mut x: usize) -> usize {
+    while parent[x] != x {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    x
+}
+
+/// Checks that `positions` holds one welded position per topological vertex.
+pub(crate) fn check_positions(what: &str, positions: &[Vec3], topology: &Topology) -> Result<()> {
+    if positions.len() == topology.vertex_count() {
+        Ok(())
+    } else {
+        Err(CoreError::Degenerate {
+            what: what.to_owned(),
+            problem: format!(
+                "{} positions given for {} welded vertices",
+                positions.len(),
+                topology.vertex_count()
+            ),
+        })
+    }
+}
+
 /// Key of an undirected edge.
 pub(crate) fn edge_key(a: u32, b: u32) -> u64 {
     let (lo, hi) = if a < b { (a, b) } else { (b, a) };
@@ -236,17 +261,8 @@ pub fn region_from_curve(
             value: format!("{}", curve[i]),
         });
     }
+    check_positions("region of interest", positions, topology)?;
     let n = topology.vertex_count();
-    if positions.len() != n {
-        return Err(CoreError::Degenerate {
-            what: "region of interest".to_owned(),
-            problem: format!(
-                "{} positions given for {} welded vertices",
-                positions.len(),
-                n
-            ),
-        });
-    }
     let (start_dir, end_dir) = end_directions(curve)?;
     let start_point = curve[0];
     let end_point = curve[curve.len() - 1];
@@ -464,13 +480,6 @@ fn cutting_plane(
     }
     // Loops: connected components of crossed triangles through crossed edges (union-find).
     let mut parent: Vec<usize> = (0..crossed.len()).collect();
-    fn find(parent: &mut [usize], mut x: usize) -> usize {
-        while parent[x] != x {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        x
-    }
     for tris in edge_tris.values() {
         for w in tris.windows(2) {
             let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
@@ -693,6 +702,18 @@ pub(crate) mod tests {
             pos.iter().filter(|p| p.y >= 2.1).count(),
             "the top cap belongs to the region"
         );
+    }
+
+    #[test]
+    fn curve_past_both_ends_makes_the_whole_part_the_region() {
+        // Fig. 11: a curve over the whole cylinder bends all of it.
+        let (p, t) = cylinder(24, 16, 0.5, 4.0);
+        let (pos, topo) = welded(p, &t);
+        let curve = [Vec3::new(0.0, -1.0, 0.5), Vec3::new(0.0, 5.0, 0.5)];
+        let region = region_from_curve(&pos, &topo, &curve).unwrap();
+        assert!(region.start.loops.is_empty() && region.end.loops.is_empty());
+        assert_eq!(region.partition.roi.len(), pos.len());
+        assert!(region.partition.rigid.is_empty());
     }
 
     #[test]

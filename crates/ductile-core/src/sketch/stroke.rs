@@ -72,19 +72,7 @@ impl SketchPlane {
 /// [`CoreError::StrokeTooShort`] when fewer than two points remain (the stroke spans less
 /// than 5 px).
 pub fn filter_stroke(points_px: &[Vec2]) -> Result<Vec<Vec2>> {
-    if let Some(i) = points_px.iter().position(|p| !p.is_finite()) {
-        return Err(CoreError::NotFinite {
-            what: format!("stroke point {i}"),
-            value: format!("{}", points_px[i]),
-        });
-    }
-    if points_px.len() < 2 {
-        return Err(CoreError::StrokeTooShort {
-            what: "stroke".to_owned(),
-            found: points_px.len(),
-            needed: 2,
-        });
-    }
+    check_stroke("stroke", points_px)?;
     let [wp, ws, wn] = AVERAGING_WEIGHTS;
     let n = points_px.len();
     let smoothed: Vec<Vec2> = (0..n)
@@ -410,7 +398,7 @@ mod tests {
     #[test]
     fn non_finite_stroke_point_is_named() {
         let err = filter_stroke(&[Vec2::ZERO, Vec2::new(f32::NAN, 1.0)]).unwrap_err();
-        assert!(err.to_string().contains("stroke point 1"), "{err}");
+        assert!(err.to_string().contains("stroke: point 1"), "{err}");
     }
 
     #[test]

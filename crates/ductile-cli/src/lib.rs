@@ -1,0 +1,67 @@
+//! The `ductile` command line, as a library so that tests can call [`run`] directly.
+//!
+//! Subcommands live one per file in [`commands`]; adding one means a variant of
+//! [`Command`], a match arm in [`run`] and a file.
+
+pub mod commands;
+
+use std::ffi::OsString;
+use std::io::Write;
+
+use clap::{Parser, Subcommand};
+
+/// Ductile: non-destructive mesh deformation from the command line.
+#[derive(Debug, Parser)]
+#[command(name = "ductile", version, about)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Evaluate every mesh's deformation stack and export the result as glTF.
+    Apply(commands::apply::Args),
+    /// Validate a scene file and print every problem found.
+    Check(commands::check::Args),
+    /// Print statistics of a mesh file (stored and welded vertices, triangles, bounds).
+    Info(commands::info::Args),
+    /// Time the evaluation of every mesh's stack.
+    Bench(commands::bench::Args),
+}
+
+/// Parses `args` (the first item is the program name) and runs the command, writing its
+/// report to `out`. Returns the process exit status (0 for success, 1 when `check` found
+/// problems); errors (bad input, unreadable files) are returned as `Err`.
+pub fn run<I, T>(args: I, out: &mut dyn Write) -> anyhow::Result<u8>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let cli = Cli::try_parse_from(args)?;
+    match cli.command {
+        Command::Apply(a) => commands::apply::run(&a, out),
+        Command::Check(a) => commands::check::run(&a, out),
+        Command::Info(a) => commands::info::run(&a, out),
+        Command::Bench(a) => commands::bench::run(&a, out),
+    }
+}
+
+/// The error and its causes on one line, without repeating a cause that an outer message
+/// already contains.
+#[must_use]
+pub fn error_message(e: &anyhow::Error) -> String {
+    let mut out = e.to_string();
+    let mut last = out.clone();
+    for cause in e.chain().skip(1) {
+        let text = cause.to_string();
+        if !last.contains(&text) {
+            out.push_str(": ");
+            out.push_str(&text);
+        }
+        last = text;
+    }
+    out
+}

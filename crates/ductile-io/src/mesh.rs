@@ -1,0 +1,483 @@
+//! Mesh import: glTF (`.glb`, `.gltf`) and Wavefront OBJ (`.obj`).
+//!
+//! A mesh reference is a path with an optional `#name` suffix selecting one part of the
+//! file. The merge rule:
+//!
+//! * **glTF**: every mesh instance of the default scene (or of the first scene when there is
+//!   no default, or every mesh once with the identity when the file has no scene) is taken
+//!   with its node's world transform applied to positions (and the inverse transpose to
+//!   normals, renormalised; winding flipped under a mirroring transform). All triangle
+//!   primitives (`TRIANGLES`, `TRIANGLE_STRIP`, `TRIANGLE_FAN`; points and lines are skipped)
+//!   are appended in scene order. `#name` keeps only the instances of the glTF mesh with that
+//!   name (or that mesh once, untransformed, when the scene does not use it).
+//! * **OBJ**: every object/group (`o`/`g`) is appended in file order; `#name` keeps only the
+//!   objects/groups with that name. Faces are triangulated and each distinct
+//!   (position, texcoord, normal) triple is one stored vertex (seam copies stay separate, as
+//!   in glTF; the welded topology of `ductile-core` joins them).
+//!
+//! Normals (UVs) are kept only when every merged primitive has them. Materials, textures,
+//! skins and morph targets are ignored.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use ductile_core::mesh::{Mesh, RestMesh};
+use glam::{Mat3, Mat4, Vec2, Vec3};
+
+use crate::error::{IoError, Result};
+
+/// A mesh file path with an optional `#name` selection of one object/group (OBJ) or mesh
+/// (glTF).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MeshRef {
+    /// The file.
+    pub path: PathBuf,
+    /// The selected part, if any.
+    pub select: Option<String>,
+}
+
+impl MeshRef {
+    /// Splits `spec` at its last `#` when what follows is a non-empty name without a path
+    /// separator (`makehuman-base.obj#body`); otherwise the whole text is the path.
+    #[must_use]
+    pub fn parse(spec: &str) -> Self {
+        match spec.rsplit_once('#') {
+            Some((path, name))
+                if !path.is_empty() && !name.is_empty() && !name.contains(['/', '\\']) =>
+            {
+                Self {
+                    path: PathBuf::from(path),
+                    select: Some(name.to_owned()),
+                }
+            }
+            _ => Self {
+                path: PathBuf::from(spec),
+                select: None,
+            },
+        }
+    }
+
+    /// The same reference with a relative path joined to `base`.
+    #[must_use]
+    pub fn resolved(mut self, base: &Path) -> Self {
+        if self.path.is_relative() {
+            self.path = base.join(&self.path);
+        }
+        self
+    }
+
+    /// The path with the `#name` suffix, for messages.
+    #[must_use]
+    pub fn display_path(&self) -> PathBuf {
+        match &self.select {
+            None => self.path.clone(),
+            Some(s) => PathBuf::from(format!("{}#{s}", self.path.display())),
+        }
+    }
+}
+
+impl fmt::Display for MeshRef {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.display_path().display())
+    }
+}
+
+/// The lower-case extension of a path ("" when there is none).
+#[must_use]
+pub fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}
+
+/// Loads the mesh `r` refers to, as stored (not yet validated or welded).
+pub fn load_mesh(r: &MeshRef) -> Result<Mesh> {
+    let mesh = match extension(&r.path).as_str() {
+        "glb" | "gltf" => load_gltf(&r.path, r.select.as_deref())?,
+        "obj" => load_obj(&r.path, r.select.as_deref())?,
+        other => {
+            return Err(IoError::UnsupportedExtension {
+                path: r.path.clone(),
+                extension: other.to_owned(),
+                expected: ".glb, .gltf or .obj",
+            });
+        }
+    };
+    if mesh.indices.is_empty() {
+        return Err(IoError::EmptyMesh {
+            path: r.display_path(),
+            vertices: mesh.positions.len(),
+        });
+    }
+    Ok(mesh)
+}
+
+/// Loads, validates and welds the mesh `r` refers to.
+pub fn load_rest_mesh(r: &MeshRef) -> Result<RestMesh> {
+    let mesh = load_mesh(r)?;
+    let name = r.display_path();
+    RestMesh::new(mesh, &name.display().to_string())
+        .map_err(|source| IoError::InvalidMesh { path: name, source })
+}
+
+/// Appends mesh parts while tracking whether every part had normals and UVs.
+#[derive(Default)]
+struct Merger {
+    mesh: Mesh,
+    all_normals: bool,
+    all_uvs: bool,
+    parts: usize,
+}
+
+impl Merger {
+    fn push(
+        &mut self,
+        positions: Vec<Vec3>,
+        normals: Option<Vec<Vec3>>,
+        uvs: Option<Vec<Vec2>>,
+        indices: impl IntoIterator<Item = u32>,
+    ) {
+        let base = self.mesh.positions.len() as u32;
+        if self.parts == 0 {
+            self.all_normals = true;
+            self.all_uvs = true;
+        }
+        self.parts += 1;
+        let n = positions.len();
+        self.all_normals &= normals.as_ref().is_some_and(|v| v.len() == n);
+        self.all_uvs &= uvs.as_ref().is_some_and(|v| v.len() == n);
+        let m = &mut self.mesh;
+        m.positions.extend(positions);
+        if self.all_normals {
+            m.normals
+                .get_or_insert_with(Vec::new)
+                .extend(normals.unwrap_or_default());
+        }
+        if self.all_uvs {
+            m.uvs
+                .get_or_insert_with(Vec::new)
+                .extend(uvs.unwrap_or_default());
+        }
+        m.indices.extend(indices.into_iter().map(|i| i + base));
+    }
+
+    fn finish(mut self) -> Mesh {
+        if !self.all_normals {
+            self.mesh.normals = None;
+        }
+        if !self.all_uvs {
+            self.mesh.uvs = None;
+        }
+        self.mesh
+    }
+}
+
+fn load_obj(path: &Path, select: Option<&str>) -> Result<Mesh> {
+    let file = std::fs::File::open(path).map_err(|source| IoError::Read {
+        path: path.to_owned(),
+        source,
+    })?;
+    let mut reader = std::io::BufReader::new(file);
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    // Materials are not needed: never open .mtl files.
+    let (models, _) = tobj::load_obj_buf(&mut reader, &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|source| IoError::Obj {
+        path: path.to_owned(),
+        source,
+    })?;
+    if let Some(name) = select
+        && !models.iter().any(|m| m.name == name)
+    {
+        let mut available: Vec<String> = models.iter().map(|m| m.name.clone()).collect();
+        available.dedup();
+        return Err(IoError::NoSuchPart {
+            path: path.to_owned(),
+            kind: "OBJ object or group",
+            name: name.to_owned(),
+            available,
+        });
+    }
+    let mut merger = Merger::default();
+    for model in models
+        .into_iter()
+        .filter(|m| select.is_none_or(|s| m.name == s))
+    {
+        let m = model.mesh;
+        let positions: Vec<Vec3> = m
+            .positions
+            .chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect();
+        let normals = (!m.normals.is_empty()).then(|| {
+            m.normals
+                .chunks_exact(3)
+                .map(|c| Vec3::new(c[0], c[1], c[2]))
+                .collect()
+        });
+        let uvs = (!m.texcoords.is_empty()).then(|| {
+            m.texcoords
+                .chunks_exact(2)
+                .map(|c| Vec2::new(c[0], c[1]))
+                .collect()
+        });
+        merger.push(positions, normals, uvs, m.indices);
+    }
+    Ok(merger.finish())
+}
+
+fn gltf_error(path: &Path) -> impl FnOnce(gltf::Error) -> IoError + '_ {
+    move |source| IoError::Gltf {
+        path: path.to_owned(),
+        source,
+    }
+}
+
+fn load_gltf(path: &Path, select: Option<&str>) -> Result<Mesh> {
+    let bytes = std::fs::read(path).map_err(|source| IoError::Read {
+        path: path.to_owned(),
+        source,
+    })?;
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(&bytes).map_err(gltf_error(path))?;
+    let base = crate::scene::scene_dir(path);
+    let buffers = gltf::import_buffers(&document, Some(base), blob).map_err(gltf_error(path))?;
+
+    // Mesh instances with their world transforms.
+    let mut instances: Vec<(gltf::Mesh<'_>, Mat4)> = Vec::new();
+    match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
+        Some(scene) => {
+            let mut stack: Vec<(gltf::Node<'_>, Mat4, usize)> =
+                scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+            stack.reverse();
+            // Depth-first, children in order. The gltf crate checks node indices but not
+            // cycles: a path deeper than the node count has one.
+            let node_count = document.nodes().count();
+            while let Some((node, parent, depth)) = stack.pop() {
+                if depth > node_count {
+                    return Err(IoError::GltfStructure {
+                        path: path.to_owned(),
+                        problem: format!(
+                            "the node hierarchy has a cycle (through node {})",
+                            node.index()
+                        ),
+                    });
+                }
+                let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+                if let Some(mesh) = node.mesh() {
+                    instances.push((mesh, world));
+                }
+                let mut children: Vec<_> = node.children().map(|c| (c, world, depth + 1)).collect();
+                children.reverse();
+                stack.extend(children);
+            }
+        }
+        None => instances.extend(document.meshes().map(|m| (m, Mat4::IDENTITY))),
+    }
+    if let Some(name) = select {
+        instances.retain(|(m, _)| m.name() == Some(name));
+        if instances.is_empty() {
+            match document.meshes().find(|m| m.name() == Some(name)) {
+                Some(m) => instances.push((m, Mat4::IDENTITY)),
+                None => {
+                    return Err(IoError::NoSuchPart {
+                        path: path.to_owned(),
+                        kind: "glTF mesh",
+                        name: name.to_owned(),
+                        available: document
+                            .meshes()
+                            .map(|m| {
+                                m.name()
+                                    .map_or_else(|| format!("#{}", m.index()), ToOwned::to_owned)
+                            })
+                            .collect(),
+                    });
+                }
+            }
+        }
+    }
+
+    let mut merger = Merger::default();
+    for (mesh, world) in instances {
+        let mesh_name = mesh
+            .name()
+            .map_or_else(|| mesh.index().to_string(), ToOwned::to_owned);
+        for (k, prim) in mesh.primitives().enumerate() {
+            use gltf::mesh::Mode;
+            let mode = prim.mode();
+            if !matches!(
+                mode,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                continue;
+            }
+            let bad = |problem: &str| IoError::GltfPrimitive {
+                path: path.to_owned(),
+                mesh: mesh_name.clone(),
+                primitive: k,
+                problem: problem.to_owned(),
+            };
+            check_accessors(&prim).map_err(|p| bad(&p))?;
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let positions: Vec<Vec3> = reader
+                .read_positions()
+                .ok_or_else(|| {
+                    bad("POSITION cannot be read (missing, or its accessor does not fit its buffer)")
+                })?
+                .map(Vec3::from)
+                .collect();
+            let normals: Option<Vec<Vec3>> =
+                reader.read_normals().map(|it| it.map(Vec3::from).collect());
+            let uvs: Option<Vec<Vec2>> = reader
+                .read_tex_coords(0)
+                .map(|tc| tc.into_f32().map(Vec2::from).collect());
+            let raw: Vec<u32> = match reader.read_indices() {
+                Some(ix) => ix.into_u32().collect(),
+                None => (0..positions.len() as u32).collect(),
+            };
+            let mut tris = triangle_list(mode, &raw);
+            let (positions, normals) = apply_transform(&world, positions, normals);
+            if world.determinant() < 0.0 {
+                for t in tris.chunks_exact_mut(3) {
+                    t.swap(1, 2);
+                }
+            }
+            merger.push(positions, normals, uvs, tris);
+        }
+    }
+    Ok(merger.finish())
+}
+
+/// Checks the types of the accessors the importer reads (the gltf crate's reader assumes
+/// them and would panic on others): `POSITION` and `NORMAL` float VEC3, `TEXCOORD_0` VEC2 of
+/// float or normalised unsigned byte/short, indices unsigned SCALAR.
+fn check_accessors(prim: &gltf::Primitive<'_>) -> std::result::Result<(), String> {
+    use gltf::accessor::{DataType, Dimensions};
+    use gltf::mesh::Semantic;
+    let describe = |a: &gltf::Accessor<'_>| format!("{:?} {:?}", a.data_type(), a.dimensions());
+    for (semantic, a) in prim.attributes() {
+        let ok = match semantic {
+            Semantic::Positions | Semantic::Normals => {
+                a.data_type() == DataType::F32 && a.dimensions() == Dimensions::Vec3
+            }
+            Semantic::TexCoords(0) => {
+                a.dimensions() == Dimensions::Vec2
+                    && matches!(a.data_type(), DataType::F32 | DataType::U8 | DataType::U16)
+            }
+            _ => true,
+        };
+        if !ok {
+            return Err(format!(
+                "attribute {semantic:?} has an invalid accessor type ({})",
+                describe(&a)
+            ));
+        }
+        if a.sparse().is_none() && a.view().is_none() {
+            return Err(format!("attribute {semantic:?} has no buffer view"));
+        }
+    }
+    if let Some(a) = prim.indices()
+        && (a.dimensions() != Dimensions::Scalar
+            || !matches!(a.data_type(), DataType::U8 | DataType::U16 | DataType::U32))
+    {
+        return Err(format!(
+            "indices have an invalid accessor type ({})",
+            describe(&a)
+        ));
+    }
+    Ok(())
+}
+
+/// Turns strip or fan indices into a triangle list (glTF 2.0 §3.7.2.1).
+fn triangle_list(mode: gltf::mesh::Mode, idx: &[u32]) -> Vec<u32> {
+    use gltf::mesh::Mode;
+    match mode {
+        Mode::TriangleStrip => (0..idx.len().saturating_sub(2))
+            .flat_map(|i| {
+                let odd = i % 2;
+                [idx[i], idx[i + 1 + odd], idx[i + 2 - odd]]
+            })
+            .collect(),
+        Mode::TriangleFan => (0..idx.len().saturating_sub(2))
+            .flat_map(|i| [idx[i + 1], idx[i + 2], idx[0]])
+            .collect(),
+        // A ragged list is kept as it is: mesh validation reports it.
+        _ => idx.to_vec(),
+    }
+}
+
+fn apply_transform(
+    m: &Mat4,
+    positions: Vec<Vec3>,
+    normals: Option<Vec<Vec3>>,
+) -> (Vec<Vec3>, Option<Vec<Vec3>>) {
+    if *m == Mat4::IDENTITY {
+        return (positions, normals);
+    }
+    let nm = Mat3::from_mat4(*m).inverse().transpose();
+    (
+        positions
+            .into_iter()
+            .map(|p| m.transform_point3(p))
+            .collect(),
+        normals.map(|ns| {
+            ns.into_iter()
+                .map(|n| (nm * n).normalize_or_zero())
+                .collect()
+        }),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mesh_ref_splits_a_name_suffix() {
+        let r = MeshRef::parse("meshes/makehuman-base.obj#body");
+        assert_eq!(r.path, PathBuf::from("meshes/makehuman-base.obj"));
+        assert_eq!(r.select.as_deref(), Some("body"));
+        assert_eq!(MeshRef::parse("a.obj").select, None);
+        assert_eq!(MeshRef::parse("dir#x/a.obj").select, None);
+        assert_eq!(MeshRef::parse("a.obj#").select, None);
+        let resolved = MeshRef::parse("a.obj#b").resolved(Path::new("scenes"));
+        assert_eq!(resolved.to_string(), "scenes/a.obj#b");
+    }
+
+    #[test]
+    fn strips_and_fans_become_lists() {
+        use gltf::mesh::Mode;
+        assert_eq!(
+            triangle_list(Mode::TriangleStrip, &[0, 1, 2, 3]),
+            vec![0, 1, 2, 1, 3, 2]
+        );
+        assert_eq!(
+            triangle_list(Mode::TriangleFan, &[0, 1, 2, 3]),
+            vec![1, 2, 0, 2, 3, 0]
+        );
+    }
+
+    #[test]
+    fn transform_moves_points_and_keeps_normals_unit() {
+        let m = Mat4::from_scale_rotation_translation(
+            Vec3::new(2.0, 1.0, 1.0),
+            glam::Quat::IDENTITY,
+            Vec3::Z,
+        );
+        let (p, n) = apply_transform(&m, vec![Vec3::X], Some(vec![Vec3::new(1.0, 1.0, 0.0)]));
+        assert_eq!(p[0], Vec3::new(2.0, 0.0, 1.0));
+        let n = n.unwrap()[0];
+        assert!((n.length() - 1.0).abs() < 1e-6);
+        // Inverse transpose of diag(2, 1, 1) halves x before renormalising.
+        assert!((n - Vec3::new(0.5, 1.0, 0.0).normalize()).length() < 1e-6);
+    }
+}

@@ -1,0 +1,66 @@
+//! Every fixture under `tests/data/malformed/` is rejected by `ductile check` (exit status 1)
+//! and by `load_scene`, with the message fragments its `// expect:` lines name.
+
+#![allow(clippy::unwrap_used)] // Tests may unwrap (house rules).
+
+mod common;
+
+use common::{cli, data, ron_files};
+
+fn expectations(text: &str) -> Vec<&str> {
+    text.lines()
+        .filter_map(|l| l.strip_prefix("// expect: "))
+        .collect()
+}
+
+#[test]
+fn every_malformed_fixture_is_reported_with_its_message() {
+    let files = ron_files(&data("malformed"));
+    assert!(files.len() >= 14, "fixtures missing: {files:?}");
+    for f in files {
+        let text = std::fs::read_to_string(&f).unwrap();
+        let expected = expectations(&text);
+        assert!(
+            !expected.is_empty(),
+            "{}: no `// expect:` line",
+            f.display()
+        );
+        let (r, out) = cli(&["check", f.to_str().unwrap()]);
+        assert_eq!(r, Ok(1), "{}: {out}", f.display());
+        for e in &expected {
+            assert!(
+                out.contains(e),
+                "{}: expected '{e}' in:\n{out}",
+                f.display()
+            );
+        }
+        assert!(ductile_io::load_scene(&f).is_err(), "{}", f.display());
+    }
+}
+
+#[test]
+fn a_good_scene_checks_ok() {
+    let (r, out) = cli(&["check", data("tetra.ron").to_str().unwrap()]);
+    assert_eq!((r, out.as_str()), (Ok(0), "ok\n"));
+}
+
+#[test]
+fn errors_name_the_file_and_never_panic_on_odd_input() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes) in [
+        ("empty.ron", &b""[..]),
+        ("binary.ron", &[0xff, 0xfe, 0x00, 0x01][..]),
+        ("number.ron", &b"42"[..]),
+        ("deep.ron", "(".repeat(10_000).as_bytes()),
+    ] {
+        let p = dir.path().join(name);
+        std::fs::write(&p, bytes).unwrap();
+        let (r, out) = cli(&["check", p.to_str().unwrap()]);
+        assert_eq!(r, Ok(1), "{name}");
+        assert!(out.contains(name), "{name}: {out}");
+    }
+    let missing = dir.path().join("nope.ron");
+    let (r, out) = cli(&["check", missing.to_str().unwrap()]);
+    assert_eq!(r, Ok(1));
+    assert!(out.contains("nope.ron: cannot read the file"), "{out}");
+}
