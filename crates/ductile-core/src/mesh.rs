@@ -14,6 +14,7 @@ use glam::{Vec2, Vec3};
 
 use crate::error::{CoreError, Result};
 use crate::normals::smooth_normals;
+use crate::refinement::RefinedMesh;
 
 /// An indexed triangle mesh as stored in a file: positions, optional normals and UVs, and
 /// triangle indices (three per triangle, counter-clockwise front faces).
@@ -269,18 +270,59 @@ impl RestMesh {
         Deformed {
             positions: topo.scatter(welded_positions),
             normals: topo.scatter(&normals),
+            refined: None,
+        }
+    }
+
+    /// Builds the stored-order output of a refined surface: `welded_positions` covers the
+    /// refined welded vertices; positions and recomputed normals are scattered to every
+    /// stored vertex of `refined` (the rest mesh's first, then the new ones).
+    #[must_use]
+    pub fn output_refined(&self, welded_positions: &[Vec3], refined: RefinedMesh) -> Deformed {
+        let topo = &refined.topology;
+        let normals = smooth_normals(welded_positions, &topo.triangles);
+        Deformed {
+            positions: topo.scatter(welded_positions),
+            normals: topo.scatter(&normals),
+            refined: Some(Box::new(refined)),
         }
     }
 }
 
 /// Deformed vertex data in the stored vertex order of the rest mesh (same length, same
-/// indices and UVs apply).
+/// indices and UVs apply) — unless a layer refined the mesh: then `refined` holds the new
+/// surface, and `positions` / `normals` cover its stored vertices (the rest mesh's first,
+/// in their order, then the new ones; see [`crate::refinement`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Deformed {
     /// Deformed positions.
     pub positions: Vec<Vec3>,
     /// Recomputed smooth unit normals.
     pub normals: Vec<Vec3>,
+    /// The refined surface (new triangle list, UVs and stored normals of every stored
+    /// vertex, parent edges of the new ones); `None` when the topology is the rest mesh's.
+    pub refined: Option<Box<RefinedMesh>>,
+}
+
+impl Deformed {
+    /// The index buffer to draw or export the output with: the rest mesh's, or the refined
+    /// one.
+    #[must_use]
+    pub fn indices(&self, rest: &RestMesh) -> Vec<u32> {
+        match &self.refined {
+            Some(r) => r.indices(),
+            None => rest.mesh().indices.clone(),
+        }
+    }
+
+    /// The UVs of every output vertex (the rest mesh's, or interpolated for refined ones).
+    #[must_use]
+    pub fn uvs<'a>(&'a self, rest: &'a RestMesh) -> Option<&'a [Vec2]> {
+        match &self.refined {
+            Some(r) => r.uvs.as_deref(),
+            None => rest.mesh().uvs.as_deref(),
+        }
+    }
 }
 
 #[cfg(test)]

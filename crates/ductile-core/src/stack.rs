@@ -17,6 +17,7 @@ use rayon::prelude::*;
 use crate::error::{CoreError, Result, check_finite};
 use crate::influence::{Influence, Mask};
 use crate::mesh::{Deformed, RestMesh, Topology};
+use crate::refinement::{EdgePoint, RefinedMesh, WholeDeform};
 use crate::tool::{BindInput, Tool, ToolBind};
 
 /// Above this many active vertices a layer deforms in parallel chunks.
@@ -105,24 +106,97 @@ impl LayerBinding {
         Ok(Self { mask, bind })
     }
 
-    /// Deforms `positions` in place with this binding (see the module documentation).
+    /// Deforms `positions` in place with this binding (see the module documentation). A
+    /// refining tool is evaluated without its refinement here; see
+    /// [`LayerBinding::apply_refining`].
     pub fn apply(&self, layer: &Layer, positions: &mut [Vec3]) -> Result<()> {
         let Some(bind) = &self.bind else {
             return Ok(());
         };
-        let active = &self.mask.indices;
-        let mut out = vec![Vec3::ZERO; active.len()];
-        {
-            let input: &[Vec3] = positions;
-            if active.len() >= PARALLEL_THRESHOLD {
-                out.par_chunks_mut(CHUNK)
-                    .zip(active.par_chunks(CHUNK))
-                    .for_each(|(o, a)| layer.tool.deform(bind, input, a, o));
-            } else {
-                layer.tool.deform(bind, input, active, &mut out);
-            }
+        let out = self.deform(layer, bind, positions, false)?.out;
+        self.blend(layer, &out, positions);
+        Ok(())
+    }
+
+    /// Like [`LayerBinding::apply`], but a refining tool may add vertices: they are
+    /// appended to `positions` (blended like the others, with input position and mask
+    /// weight interpolated from their parent edge) and the splits are returned, in order
+    /// (see [`crate::refinement`]). Without a refinement this is exactly
+    /// [`LayerBinding::apply`].
+    pub fn apply_refining(
+        &self,
+        layer: &Layer,
+        positions: &mut Vec<Vec3>,
+    ) -> Result<Option<Vec<EdgePoint>>> {
+        let Some(bind) = &self.bind else {
+            return Ok(None);
+        };
+        let result = self.deform(layer, bind, positions, true)?;
+        let Some(refinement) = result.refinement else {
+            self.blend(layer, &result.out, positions);
+            return Ok(None);
+        };
+        let mut input = positions.clone();
+        let mut weights = vec![0.0_f32; positions.len()];
+        for (&i, &w) in self.mask.indices.iter().zip(&self.mask.weights) {
+            weights[i as usize] = w;
         }
-        if let Some(k) = out.iter().position(|p| !p.is_finite()) {
+        self.blend(layer, &result.out, positions);
+        for (e, &d) in refinement.splits.iter().zip(&refinement.deformed) {
+            let p = e.lerp(&input);
+            let w = e.lerp(&weights);
+            input.push(p);
+            weights.push(w);
+            let w = w * layer.weight;
+            positions.push(if w == 1.0 { d } else { p + (d - p) * w });
+        }
+        if let Some(k) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(CoreError::Degenerate {
+                what: format!("layer '{}'", layer.name),
+                problem: format!("the refinement produced a non-finite position for vertex {k}"),
+            });
+        }
+        Ok(Some(refinement.splits))
+    }
+
+    /// The tool's output for every active vertex: whole-layer tools in one call, the others
+    /// in (parallel) chunks; checked to be finite.
+    fn deform(
+        &self,
+        layer: &Layer,
+        bind: &ToolBind,
+        positions: &[Vec3],
+        refine: bool,
+    ) -> Result<WholeDeform> {
+        let active = &self.mask.indices;
+        let result = match layer.tool.deform_whole(bind, positions, refine) {
+            Some(r) => r?,
+            None => {
+                let mut out = vec![Vec3::ZERO; active.len()];
+                if active.len() >= PARALLEL_THRESHOLD {
+                    out.par_chunks_mut(CHUNK)
+                        .zip(active.par_chunks(CHUNK))
+                        .for_each(|(o, a)| layer.tool.deform(bind, positions, a, o));
+                } else {
+                    layer.tool.deform(bind, positions, active, &mut out);
+                }
+                WholeDeform {
+                    out,
+                    refinement: None,
+                }
+            }
+        };
+        if result.out.len() != active.len() {
+            return Err(CoreError::Degenerate {
+                what: format!("layer '{}'", layer.name),
+                problem: format!(
+                    "the tool returned {} positions for {} active vertices (stale bind?)",
+                    result.out.len(),
+                    active.len()
+                ),
+            });
+        }
+        if let Some(k) = result.out.iter().position(|p| !p.is_finite()) {
             return Err(CoreError::Degenerate {
                 what: format!("layer '{}'", layer.name),
                 problem: format!(
@@ -131,13 +205,28 @@ impl LayerBinding {
                 ),
             });
         }
-        for ((&i, &w), &d) in active.iter().zip(&self.mask.weights).zip(&out) {
+        Ok(result)
+    }
+
+    /// `p'ᵢ = pᵢ + weight · wᵢ · (D(pᵢ) − pᵢ)` over the active vertices, exactly `D(pᵢ)` when
+    /// `weight · wᵢ = 1`.
+    fn blend(&self, layer: &Layer, out: &[Vec3], positions: &mut [Vec3]) {
+        for ((&i, &w), &d) in self.mask.indices.iter().zip(&self.mask.weights).zip(out) {
             let w = w * layer.weight;
             let p = &mut positions[i as usize];
             *p = if w == 1.0 { d } else { *p + (d - *p) * w };
         }
-        Ok(())
     }
+}
+
+/// A stack's result on welded vertices.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Evaluation {
+    /// Deformed welded positions: the rest mesh's welded vertices first, then the vertices
+    /// added by refining layers, in order.
+    pub positions: Vec<Vec3>,
+    /// The refined surface, when a layer refined the mesh; `None` keeps the rest topology.
+    pub refined: Option<RefinedMesh>,
 }
 
 /// An ordered list of layers, evaluated bottom (index 0) to top.
@@ -153,19 +242,40 @@ impl Stack {
         self.layers.iter().try_for_each(Layer::validate)
     }
 
-    /// Evaluates the stack on `rest` and returns welded deformed positions.
-    pub fn evaluate_welded(&self, rest: &RestMesh) -> Result<Vec<Vec3>> {
+    /// Evaluates the stack on `rest`. Each layer binds on the surface the layers below
+    /// produced: the rest topology, or the refined one after a refining layer.
+    pub fn evaluate_surface(&self, rest: &RestMesh) -> Result<Evaluation> {
         self.validate()?;
         let mut positions = rest.welded_positions().to_vec();
+        let mut refined: Option<RefinedMesh> = None;
         for layer in self.layers.iter().filter(|l| !l.is_inert()) {
-            LayerBinding::bind(layer, &positions, rest.topology())?.apply(layer, &mut positions)?;
+            let topology = refined.as_ref().map_or(rest.topology(), |r| &r.topology);
+            let binding = LayerBinding::bind(layer, &positions, topology)?;
+            if let Some(splits) = binding.apply_refining(layer, &mut positions)? {
+                let base = match refined.take() {
+                    Some(r) => r,
+                    None => RefinedMesh::unrefined(rest.mesh(), rest.topology()),
+                };
+                refined = Some(base.split(&splits));
+            }
         }
-        Ok(positions)
+        Ok(Evaluation { positions, refined })
+    }
+
+    /// Evaluates the stack on `rest` and returns welded deformed positions (with the
+    /// vertices of refining layers appended, see [`Evaluation::positions`]).
+    pub fn evaluate_welded(&self, rest: &RestMesh) -> Result<Vec<Vec3>> {
+        Ok(self.evaluate_surface(rest)?.positions)
     }
 
     /// Evaluates the stack and returns positions and recomputed normals in the stored
-    /// vertex order of `rest`.
+    /// vertex order of `rest` (followed by the stored vertices a refining layer added, see
+    /// [`Deformed::refined`]).
     pub fn evaluate(&self, rest: &RestMesh) -> Result<Deformed> {
-        Ok(rest.output(&self.evaluate_welded(rest)?))
+        let ev = self.evaluate_surface(rest)?;
+        Ok(match ev.refined {
+            None => rest.output(&ev.positions),
+            Some(r) => rest.output_refined(&ev.positions, r),
+        })
     }
 }

@@ -23,6 +23,8 @@ use crate::ffsd::{FfsdBind, FfsdTool};
 use crate::lattice::{LatticeTool, PreparedLattice};
 use crate::mesh::Topology;
 use crate::surface::{ShapeSurfaceTool, SurfaceBind};
+use crate::refinement::WholeDeform;
+use crate::sketch::tool::{SketchBind, SketchTool};
 
 /// What a tool sees when it binds: the layer's input.
 #[derive(Debug, Clone, Copy)]
@@ -66,6 +68,8 @@ pub trait Deformer {
 pub enum Tool {
     /// FFSD control points (Yoshizawa et al. 2002; Martínek & Kolingerová 2014).
     Ffsd(FfsdTool),
+    /// Sketch-based bending and twisting (Kho & Garland 2005).
+    Sketch(Box<SketchTool>),
     /// Axial deformation AxDf (Lazarus et al. 1994; Bechmann's survey §4.1).
     Axial(AxialTool),
     /// Curve deformation by De Casteljau / De Boor (Chang & Rockwood 1994; survey §4.2).
@@ -85,6 +89,8 @@ pub enum Tool {
 pub enum ToolBind {
     /// Bind of [`Tool::Ffsd`].
     Ffsd(FfsdBind),
+    /// Bind of [`Tool::Sketch`].
+    Sketch(Box<SketchBind>),
     /// Bind of [`Tool::Axial`].
     Axial(AxialBind),
     /// Bind of [`Tool::Curve`].
@@ -105,6 +111,7 @@ impl Tool {
     pub fn kind_name(&self) -> &'static str {
         match self {
             Tool::Ffsd(_) => "FFSD control points",
+            Tool::Sketch(_) => "sketch deformation",
             Tool::Axial(_) => "axial deformation",
             Tool::Curve(_) => "curve deformation",
             Tool::Lattice(_) => "lattice FFD",
@@ -129,6 +136,7 @@ impl Tool {
     pub fn validate(&self, what: &str) -> Result<()> {
         match self {
             Tool::Ffsd(t) => t.validate(what),
+            Tool::Sketch(t) => t.validate(what),
             Tool::Axial(t) => t.validate(what),
             Tool::Curve(t) => t.validate(what),
             Tool::Lattice(t) => t.validate(what),
@@ -142,6 +150,7 @@ impl Tool {
     pub fn bind(&self, input: &BindInput<'_>) -> Result<ToolBind> {
         Ok(match self {
             Tool::Ffsd(t) => ToolBind::Ffsd(t.bind(input)?),
+            Tool::Sketch(t) => ToolBind::Sketch(Box::new(t.bind(input)?)),
             Tool::Axial(t) => ToolBind::Axial(t.bind(input)?),
             Tool::Curve(t) => ToolBind::Curve(t.bind(input)?),
             Tool::Lattice(t) => ToolBind::Lattice(Box::new(t.bind(input)?)),
@@ -156,6 +165,7 @@ impl Tool {
     pub fn deform(&self, bind: &ToolBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
         match (self, bind) {
             (Tool::Ffsd(t), ToolBind::Ffsd(b)) => t.deform(b, positions, active, out),
+            (Tool::Sketch(t), ToolBind::Sketch(b)) => t.deform(b, positions, active, out),
             (Tool::Axial(t), ToolBind::Axial(b)) => t.deform(b, positions, active, out),
             (Tool::Curve(t), ToolBind::Curve(b)) => t.deform(b, positions, active, out),
             (Tool::Lattice(t), ToolBind::Lattice(b)) => t.deform(b, positions, active, out),
@@ -173,11 +183,30 @@ impl Tool {
         }
     }
 
+    /// Evaluates a tool that works on the layer as a whole (a linear solve, a topology
+    /// change) rather than vertex by vertex: the deformed position of every vertex of the
+    /// active set the bind was made for (in its order) and, when `refine` is true, the
+    /// tool's refinement.
+    /// `None` for per-vertex tools, which the stack deforms in chunks with
+    /// [`Tool::deform`].
+    pub fn deform_whole(
+        &self,
+        bind: &ToolBind,
+        positions: &[Vec3],
+        refine: bool,
+    ) -> Option<Result<WholeDeform>> {
+        match (self, bind) {
+            (Tool::Sketch(t), ToolBind::Sketch(b)) => Some(t.evaluate(b, positions, refine)),
+            _ => None,
+        }
+    }
+
     /// See [`Deformer::transformed`].
     #[must_use]
     pub fn transformed(&self, m: &Affine3A) -> Self {
         match self {
             Tool::Ffsd(t) => Tool::Ffsd(t.transformed(m)),
+            Tool::Sketch(t) => Tool::Sketch(Box::new(t.transformed(m))),
             Tool::Axial(t) => Tool::Axial(t.transformed(m)),
             Tool::Curve(t) => Tool::Curve(t.transformed(m)),
             Tool::Lattice(t) => Tool::Lattice(t.transformed(m)),
@@ -192,6 +221,7 @@ impl Tool {
     pub fn same_rest_state(&self, other: &Self) -> bool {
         match (self, other) {
             (Tool::Ffsd(a), Tool::Ffsd(b)) => a.same_rest_state(b),
+            (Tool::Sketch(a), Tool::Sketch(b)) => a.same_rest_state(b),
             (Tool::Axial(a), Tool::Axial(b)) => a.same_rest_state(b),
             (Tool::Curve(a), Tool::Curve(b)) => a.same_rest_state(b),
             (Tool::Lattice(a), Tool::Lattice(b)) => a.same_rest_state(b),
