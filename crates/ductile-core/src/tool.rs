@@ -22,9 +22,9 @@ use crate::error::Result;
 use crate::ffsd::{FfsdBind, FfsdTool};
 use crate::lattice::{LatticeTool, PreparedLattice};
 use crate::mesh::Topology;
-use crate::surface::{ShapeSurfaceTool, SurfaceBind};
 use crate::refinement::WholeDeform;
 use crate::sketch::tool::{SketchBind, SketchTool};
+use crate::surface::{ShapeSurfaceTool, SurfaceBind};
 
 /// What a tool sees when it binds: the layer's input.
 #[derive(Debug, Clone, Copy)]
