@@ -86,8 +86,23 @@ fn mapped(mut doc: Document, source: &str) -> Document {
     doc
 }
 
+/// Benchmarks every macro of the library at once, and the paper's Table 1 case of exactly 30
+/// macros (the first 30 layers of the stack, in the library's group order).
 fn bench_mesh(c: &mut Criterion, name: &str, doc: &Document, rest: &RestMesh) {
-    let stack: Stack = doc.resolve_stack("head", rest).expect("resolve");
+    let all: Stack = doc.resolve_stack("head", rest).expect("resolve");
+    let thirty = Stack {
+        layers: all.layers.iter().take(30).cloned().collect(),
+    };
+    bench_stack(
+        c,
+        &format!("{name}/{} macros", all.layers.len()),
+        &all,
+        rest,
+    );
+    bench_stack(c, &format!("{name}/30 macros"), &thirty, rest);
+}
+
+fn bench_stack(c: &mut Criterion, name: &str, stack: &Stack, rest: &RestMesh) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
