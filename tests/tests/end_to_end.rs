@@ -118,7 +118,7 @@ fn failed_apply_leaves_the_old_output_and_no_temporary_file() {
         positions: &positions,
         normals: None,
         uvs: None,
-        indices: &[0, 1, 2],
+        indices: std::borrow::Cow::Borrowed(&[0, 1, 2]),
     };
     let err = ductile_io::export_gltf(&out, &[mesh])
         .unwrap_err()

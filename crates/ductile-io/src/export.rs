@@ -6,6 +6,7 @@
 //! VEC2) when given, and `u32` indices. All data lives in one buffer, one buffer view per
 //! attribute. The file is written atomically.
 
+use std::borrow::Cow;
 use std::path::Path;
 
 use base64::Engine as _;
@@ -19,7 +20,7 @@ use crate::mesh::extension;
 use crate::write_atomic;
 
 /// One mesh to export, borrowing its data.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct ExportMesh<'a> {
     /// Name of the glTF mesh and node.
     pub name: &'a str,
@@ -29,8 +30,8 @@ pub struct ExportMesh<'a> {
     pub normals: Option<&'a [Vec3]>,
     /// Texture coordinates (same length as positions), if any.
     pub uvs: Option<&'a [Vec2]>,
-    /// Triangle indices, three per triangle.
-    pub indices: &'a [u32],
+    /// Triangle indices, three per triangle (owned when a layer refined the mesh).
+    pub indices: Cow<'a, [u32]>,
 }
 
 impl<'a> ExportMesh<'a> {
@@ -42,20 +43,23 @@ impl<'a> ExportMesh<'a> {
             positions: &mesh.positions,
             normals: mesh.normals.as_deref(),
             uvs: mesh.uvs.as_deref(),
-            indices: &mesh.indices,
+            indices: Cow::Borrowed(&mesh.indices),
         }
     }
 
     /// A deformed mesh: deformed positions and recomputed normals with the rest mesh's UVs
-    /// and indices.
+    /// and indices, or the refined ones when a layer refined the mesh.
     #[must_use]
     pub fn deformed(name: &'a str, rest: &'a RestMesh, deformed: &'a Deformed) -> Self {
         Self {
             name,
             positions: &deformed.positions,
             normals: Some(&deformed.normals),
-            uvs: rest.mesh().uvs.as_deref(),
-            indices: &rest.mesh().indices,
+            uvs: deformed.uvs(rest),
+            indices: match &deformed.refined {
+                Some(refined) => Cow::Owned(refined.indices()),
+                None => Cow::Borrowed(&rest.mesh().indices),
+            },
         }
     }
 }
