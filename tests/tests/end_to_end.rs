@@ -31,8 +31,12 @@ fn apply_and_reload(scene: &std::path::Path) -> Vec<(usize, bool)> {
         .unwrap();
         let rest = m.rest.mesh();
         let expected = loaded.evaluate(&m.name).unwrap();
-        assert_eq!(back.indices, rest.indices, "{}", m.name);
-        assert_eq!(back.uvs, rest.uvs, "{}", m.name);
+        // The rest mesh's indices and UVs, or the refined ones when a layer refined it.
+        assert_eq!(back.indices, expected.indices(&m.rest), "{}", m.name);
+        assert_eq!(back.uvs.as_deref(), expected.uvs(&m.rest), "{}", m.name);
+        if expected.refined.is_none() {
+            assert_eq!(back.indices, rest.indices, "{}", m.name);
+        }
         assert_eq!(back.positions, expected.positions, "{}", m.name);
         let normals = back.normals.expect("apply writes normals");
         assert!(normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-4));
@@ -147,6 +151,26 @@ fn info_reports_counts_and_accepts_a_name_suffix() {
         msg.contains("no OBJ object or group named 'nothing' (available: tetra)"),
         "{msg}"
     );
+}
+
+#[test]
+fn apply_exports_a_refined_mesh() {
+    // The sketch demo with adaptive refinement forced on: the output has the rest vertices
+    // plus the split-edge vertices, and its own index buffer.
+    let scene = data("sketch-refine.ron");
+    let rest = load_scene(&scene).unwrap().meshes[0]
+        .rest
+        .mesh()
+        .positions
+        .len();
+    let out = apply_and_reload(&scene);
+    assert_eq!(out.len(), 1);
+    assert!(
+        out[0].0 > rest,
+        "{} vertices after refinement, {rest} before",
+        out[0].0
+    );
+    assert!(out[0].1);
 }
 
 #[test]
