@@ -4,43 +4,21 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use ductile_core::prelude::*;
+use ductile_core::primitives;
 use glam::Vec3;
 
 /// A UV sphere of radius 0.1 (head-sized in metres) with `rings × segments` vertices.
 fn sphere(rings: usize, segments: usize) -> RestMesh {
-    let mut positions = Vec::new();
-    for r in 0..rings {
+    let mesh = primitives::grid(rings, segments, true, |r, s| {
         let theta = std::f32::consts::PI * (r as f32 + 0.5) / rings as f32;
-        for s in 0..segments {
-            let phi = std::f32::consts::TAU * s as f32 / segments as f32;
-            positions.push(
-                0.1 * Vec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.cos(),
-                    theta.sin() * phi.sin(),
-                ),
-            );
-        }
-    }
-    let mut indices = Vec::new();
-    for r in 0..rings - 1 {
-        for s in 0..segments {
-            let a = (r * segments + s) as u32;
-            let b = (r * segments + (s + 1) % segments) as u32;
-            let (c, d) = (a + segments as u32, b + segments as u32);
-            indices.extend([a, c, b, b, c, d]);
-        }
-    }
-    RestMesh::new(
-        Mesh {
-            positions,
-            normals: None,
-            uvs: None,
-            indices,
-        },
-        "sphere",
-    )
-    .expect("valid sphere")
+        let phi = std::f32::consts::TAU * s as f32 / segments as f32;
+        0.1 * Vec3::new(
+            theta.sin() * phi.cos(),
+            theta.cos(),
+            theta.sin() * phi.sin(),
+        )
+    });
+    RestMesh::new(mesh, "sphere").expect("valid sphere")
 }
 
 fn stack(rest: &RestMesh) -> Stack {

@@ -12,6 +12,7 @@ use std::f32::consts::PI;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use ductile_core::prelude::*;
+use ductile_core::primitives;
 use ductile_core::sketch::partition::Partition;
 use ductile_core::sketch::tool::{Curve, SketchMode, SketchTool};
 use glam::Vec3;
@@ -21,32 +22,11 @@ const SEGMENTS: usize = 200;
 const STEP: f32 = 0.02;
 
 fn tube() -> RestMesh {
-    let mut positions = Vec::with_capacity(RINGS * SEGMENTS);
-    for r in 0..RINGS {
-        for s in 0..SEGMENTS {
-            let a = 2.0 * PI * s as f32 / SEGMENTS as f32;
-            positions.push(Vec3::new(r as f32 * STEP, 0.3 * a.cos(), 0.3 * a.sin()));
-        }
-    }
-    let mut indices = Vec::new();
-    for r in 0..RINGS - 1 {
-        for s in 0..SEGMENTS {
-            let a = (r * SEGMENTS + s) as u32;
-            let b = (r * SEGMENTS + (s + 1) % SEGMENTS) as u32;
-            let (c, d) = (a + SEGMENTS as u32, b + SEGMENTS as u32);
-            indices.extend([a, b, d, a, d, c]);
-        }
-    }
-    RestMesh::new(
-        Mesh {
-            positions,
-            normals: None,
-            uvs: None,
-            indices,
-        },
-        "tube",
-    )
-    .expect("valid tube")
+    let mesh = primitives::grid(RINGS, SEGMENTS, true, |r, s| {
+        let a = 2.0 * PI * s as f32 / SEGMENTS as f32;
+        Vec3::new(r as f32 * STEP, 0.3 * a.cos(), 0.3 * a.sin())
+    });
+    RestMesh::new(mesh, "tube").expect("valid tube")
 }
 
 /// A U of length `len` starting at `start` along +x, bending with radius `len / (2 + π)`...

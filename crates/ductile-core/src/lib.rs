@@ -21,6 +21,7 @@ pub mod influence;
 pub mod lattice;
 pub mod mesh;
 pub mod normals;
+pub mod primitives;
 pub mod refinement;
 pub mod sketch;
 pub mod stack;

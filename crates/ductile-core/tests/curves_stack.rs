@@ -5,37 +5,18 @@
 use ductile_core::axial::{AxialTool, AxisPoint, AxisShape};
 use ductile_core::curve::{CurveBasis, CurveTool};
 use ductile_core::prelude::*;
+use ductile_core::primitives;
 use glam::Vec3;
 
 /// A wavy `n × n` grid over `[0, 2] × [−0.5, 0.5]`; n = 131 has more vertices than the
 /// stack's parallel threshold, so it deforms in chunks.
 fn grid(n: usize) -> RestMesh {
-    let mut positions = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let x = 2.0 * i as f32 / (n - 1) as f32;
-            let y = j as f32 / (n - 1) as f32 - 0.5;
-            positions.push(Vec3::new(x, y, 0.1 * (3.0 * x).sin() * (2.0 * y).cos()));
-        }
-    }
-    let mut indices = Vec::new();
-    for j in 0..n - 1 {
-        for i in 0..n - 1 {
-            let a = (j * n + i) as u32;
-            let (b, c, d) = (a + 1, a + n as u32, a + n as u32 + 1);
-            indices.extend([a, b, d, a, d, c]);
-        }
-    }
-    RestMesh::new(
-        Mesh {
-            positions,
-            normals: None,
-            uvs: None,
-            indices,
-        },
-        "grid",
-    )
-    .unwrap()
+    let mesh = primitives::grid(n, n, false, |j, i| {
+        let x = 2.0 * i as f32 / (n - 1) as f32;
+        let y = j as f32 / (n - 1) as f32 - 0.5;
+        Vec3::new(x, y, 0.1 * (3.0 * x).sin() * (2.0 * y).cos())
+    });
+    RestMesh::new(mesh, "grid").unwrap()
 }
 
 fn direct(tool: &Tool, rest: &RestMesh) -> Vec<Vec3> {

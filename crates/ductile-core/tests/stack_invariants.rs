@@ -1,6 +1,7 @@
 //! Invariants of the deformation stack with FFSD tools, checked on random inputs.
 
 use ductile_core::prelude::*;
+use ductile_core::primitives;
 use glam::{Affine3A, Vec3};
 use proptest::prelude::*;
 
@@ -9,32 +10,12 @@ use proptest::prelude::*;
 fn grid(n: usize) -> RestMesh {
     let c = (n / 2) as f32;
     let h = 2.0 / (n - 1) as f32;
-    let mut positions = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let x = (i as f32 - c) * h;
-            let y = (j as f32 - c) * h;
-            positions.push(Vec3::new(x, y, 0.2 * (2.0 * x).cos() * (1.5 * y).sin()));
-        }
-    }
-    let mut indices = Vec::new();
-    for j in 0..n - 1 {
-        for i in 0..n - 1 {
-            let a = (j * n + i) as u32;
-            let (b, c2, d) = (a + 1, a + n as u32, a + n as u32 + 1);
-            indices.extend([a, b, d, a, d, c2]);
-        }
-    }
-    RestMesh::new(
-        Mesh {
-            positions,
-            normals: None,
-            uvs: None,
-            indices,
-        },
-        "grid",
-    )
-    .unwrap()
+    let mesh = primitives::grid(n, n, false, |j, i| {
+        let x = (i as f32 - c) * h;
+        let y = (j as f32 - c) * h;
+        Vec3::new(x, y, 0.2 * (2.0 * x).cos() * (1.5 * y).sin())
+    });
+    RestMesh::new(mesh, "grid").unwrap()
 }
 
 fn mirror(p: Vec3) -> Vec3 {
