@@ -1,0 +1,210 @@
+//! The scene document as a bevy resource, edited only through history operations.
+//!
+//! [`SceneDocument`] owns the live [`Document`] and its [`History`]; views read it and ask
+//! for edits with [`DocumentCommand`] messages, which [`apply_document_commands`] applies in
+//! [`DuctileSystems::Edit`](crate::DuctileSystems::Edit). Nothing else mutates the document,
+//! so the ECS mirror and the deformed meshes always follow it.
+
+use bevy::prelude::*;
+use ductile_history::history::History;
+use ductile_history::operation::Operation;
+use ductile_scene::document::Document;
+
+use crate::error::{DuctileBevyError, Result};
+
+/// The live document, its undo history and a revision counter that changes on every edit.
+#[derive(Resource, Debug, Clone)]
+pub struct SceneDocument {
+    document: Document,
+    history: History,
+    revision: u64,
+    saved_revision: u64,
+    next_gesture: u64,
+}
+
+impl Default for SceneDocument {
+    fn default() -> Self {
+        Self::new(Document::default())
+    }
+}
+
+impl SceneDocument {
+    /// A document with an empty history that starts at it.
+    #[must_use]
+    pub fn new(document: Document) -> Self {
+        Self::with_history(History::new(document.clone()), document)
+    }
+
+    /// A document reached by `history` (the caller checked that `document` is the history's
+    /// base with its first `history.cursor()` steps applied, as a loaded project is).
+    #[must_use]
+    pub fn with_history(history: History, document: Document) -> Self {
+        Self {
+            document,
+            history,
+            revision: 0,
+            saved_revision: 0,
+            next_gesture: 1,
+        }
+    }
+
+    /// Replaces the document and its history (another file was opened, or saving rewrote
+    /// mesh sources). The revision moves on, so everything re-synchronises.
+    pub fn replace(&mut self, history: History, document: Document) {
+        self.document = document;
+        self.history = history;
+        self.revision += 1;
+    }
+
+    /// The live document.
+    #[must_use]
+    pub fn document(&self) -> &Document {
+        &self.document
+    }
+
+    /// The undo history.
+    #[must_use]
+    pub fn history(&self) -> &History {
+        &self.history
+    }
+
+    /// A number that changes with every applied edit, undo, redo or jump.
+    #[must_use]
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    /// True when the document changed since it was loaded or last marked saved.
+    #[must_use]
+    pub fn is_modified(&self) -> bool {
+        self.revision != self.saved_revision
+    }
+
+    /// Records that the current state is what is on disk.
+    pub fn mark_saved(&mut self) {
+        self.saved_revision = self.revision;
+    }
+
+    /// A new gesture id: edits pushed with the same id (a drag, a slider movement) merge
+    /// into one undo step.
+    pub fn new_gesture(&mut self) -> u64 {
+        let g = self.next_gesture;
+        self.next_gesture += 1;
+        g
+    }
+
+    /// Applies `op` and records it (merged into the previous step when `gesture` continues
+    /// it). On error nothing changes.
+    pub fn apply(
+        &mut self,
+        op: Operation,
+        label: impl Into<String>,
+        gesture: Option<u64>,
+    ) -> Result<()> {
+        self.history
+            .push(&mut self.document, op, label, now_ms(), gesture)?;
+        self.revision += 1;
+        Ok(())
+    }
+
+    /// Undoes the last step; `false` when there is none.
+    pub fn undo(&mut self) -> Result<bool> {
+        let done = self.history.undo(&mut self.document)?;
+        if done {
+            self.revision += 1;
+        }
+        Ok(done)
+    }
+
+    /// Redoes the next step; `false` when there is none.
+    pub fn redo(&mut self) -> Result<bool> {
+        let done = self.history.redo(&mut self.document)?;
+        if done {
+            self.revision += 1;
+        }
+        Ok(done)
+    }
+
+    /// Moves to the state after step `n` (0 = the history's base).
+    pub fn jump(&mut self, n: usize) -> Result<()> {
+        if n > self.history.len() {
+            return Err(DuctileBevyError::NoSuchStep {
+                step: n,
+                len: self.history.len(),
+            });
+        }
+        self.history.jump(&mut self.document, n)?;
+        self.revision += 1;
+        Ok(())
+    }
+}
+
+fn now_ms() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| u64::try_from(d.as_millis()).unwrap_or(u64::MAX))
+}
+
+/// A request to edit the document. Panels, gizmos and shortcuts write these; they never
+/// touch the document themselves.
+#[derive(Message, Debug, Clone, PartialEq)]
+pub enum DocumentCommand {
+    /// Apply an operation and record it.
+    Apply {
+        /// The edit.
+        op: Operation,
+        /// The history label ("" = the operation's own description).
+        label: String,
+        /// The gesture the edit belongs to (consecutive edits of one gesture are one step).
+        gesture: Option<u64>,
+    },
+    /// Undo the last step.
+    Undo,
+    /// Redo the next step.
+    Redo,
+    /// Go to the state after step `n` of the history (0 = its base).
+    Jump(usize),
+}
+
+impl DocumentCommand {
+    /// An operation to apply as its own step.
+    #[must_use]
+    pub fn apply(op: Operation) -> Self {
+        Self::Apply {
+            op,
+            label: String::new(),
+            gesture: None,
+        }
+    }
+}
+
+/// The last edit that was refused, for the status bar (cleared by the next successful one).
+#[derive(Resource, Debug, Default, Clone, PartialEq)]
+pub struct EditStatus {
+    /// The error of the last refused command, as a sentence.
+    pub last_error: Option<String>,
+}
+
+/// Applies every pending [`DocumentCommand`] in order. A refused command leaves the document
+/// as it was and its error in [`EditStatus`].
+pub fn apply_document_commands(
+    mut commands: MessageReader<DocumentCommand>,
+    mut doc: ResMut<SceneDocument>,
+    mut status: ResMut<EditStatus>,
+) {
+    for command in commands.read() {
+        let result = match command.clone() {
+            DocumentCommand::Apply { op, label, gesture } => doc.apply(op, label, gesture),
+            DocumentCommand::Undo => doc.undo().map(|_| ()),
+            DocumentCommand::Redo => doc.redo().map(|_| ()),
+            DocumentCommand::Jump(n) => doc.jump(n),
+        };
+        match result {
+            Ok(()) => status.last_error = None,
+            Err(e) => {
+                warn!("edit refused: {e}");
+                status.last_error = Some(e.to_string());
+            }
+        }
+    }
+}

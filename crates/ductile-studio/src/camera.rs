@@ -1,0 +1,228 @@
+//! The viewport camera: orbit, pan and zoom around a focus point, with mouse and trackpad,
+//! and frame-selected (F).
+//!
+//! Mouse: left-drag on empty space or middle-drag orbits, Shift + those (or right-drag) pans,
+//! the wheel zooms. Trackpad: two-finger scroll orbits (Shift: pans), pinch zooms.
+
+use bevy::input::gestures::PinchGesture;
+use bevy::input::mouse::{AccumulatedMouseMotion, MouseScrollUnit, MouseWheel};
+use bevy::prelude::*;
+use ductile_bevy::prelude::*;
+
+/// An orbiting camera: it looks at `focus` from `distance` away, at `yaw` around +Y and
+/// `pitch` above the horizon (radians).
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+pub struct OrbitCamera {
+    /// The point looked at (world).
+    pub focus: Vec3,
+    /// Rotation around the world Y axis.
+    pub yaw: f32,
+    /// Elevation above the XZ plane, kept inside (−π/2, π/2).
+    pub pitch: f32,
+    /// Distance from the focus.
+    pub distance: f32,
+}
+
+impl Default for OrbitCamera {
+    fn default() -> Self {
+        Self {
+            focus: Vec3::ZERO,
+            yaw: 0.0,
+            pitch: 0.0,
+            distance: 1.0,
+        }
+    }
+}
+
+impl OrbitCamera {
+    /// The camera transform for this orbit.
+    #[must_use]
+    pub fn transform(&self) -> Transform {
+        let rotation = Quat::from_euler(EulerRot::YXZ, self.yaw, -self.pitch, 0.0);
+        let eye = self.focus + rotation * Vec3::Z * self.distance;
+        Transform::from_translation(eye).looking_at(self.focus, Vec3::Y)
+    }
+
+    /// Frames a box: looks at its centre from far enough to see a sphere around it with a
+    /// vertical field of view `fov` (radians).
+    pub fn frame(&mut self, min: Vec3, max: Vec3, fov: f32) {
+        self.focus = (min + max) * 0.5;
+        let radius = ((max - min).length() * 0.5).max(1e-3);
+        self.distance = radius / (fov * 0.5).sin() * 1.1;
+    }
+}
+
+/// Whether the pointer is over the 3-D viewport (not over a panel, menu or dialog); set by
+/// the UI each frame.
+#[derive(Resource, Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct PointerOverViewport(pub bool);
+
+/// Whether the keyboard belongs to the viewport (no text field has focus); set by the UI.
+#[derive(Resource, Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct KeyboardToViewport(pub bool);
+
+/// Orbits, pans and zooms from mouse buttons, wheel and trackpad gestures.
+#[allow(clippy::too_many_arguments)]
+pub fn orbit_camera(
+    buttons: Res<ButtonInput<MouseButton>>,
+    keys: Res<ButtonInput<KeyCode>>,
+    motion: Res<AccumulatedMouseMotion>,
+    mut wheel: MessageReader<MouseWheel>,
+    mut pinch: MessageReader<PinchGesture>,
+    over: Res<PointerOverViewport>,
+    drag: Res<DragState>,
+    hover: Option<Res<bevy::picking::hover::HoverMap>>,
+    handles: Query<(), With<HandleMarker>>,
+    mut orbiting: Local<bool>,
+    mut cameras: Query<(&mut OrbitCamera, &mut Transform, &Projection)>,
+) {
+    let Ok((mut orbit, mut transform, projection)) = cameras.single_mut() else {
+        return;
+    };
+    let shift = keys.any_pressed([KeyCode::ShiftLeft, KeyCode::ShiftRight]);
+    let any_button = [MouseButton::Left, MouseButton::Middle, MouseButton::Right];
+    // A gesture starts only over the viewport and not on a handle; it continues until the
+    // buttons are released, wherever the pointer goes.
+    if buttons.any_just_pressed(any_button) {
+        let on_handle = hover.as_ref().is_some_and(|h| {
+            h.values()
+                .any(|hits| hits.keys().any(|e| handles.contains(*e)))
+        });
+        *orbiting = over.0 && drag.active.is_none() && !on_handle;
+    }
+    if !buttons.any_pressed(any_button) {
+        *orbiting = false;
+    }
+    let fov = match projection {
+        Projection::Perspective(p) => p.fov,
+        _ => std::f32::consts::FRAC_PI_4,
+    };
+    let pan_scale = orbit.distance * (fov * 0.5).tan() * 2.0 / 800.0;
+    let delta = motion.delta;
+    if *orbiting && drag.active.is_none() && delta != Vec2::ZERO {
+        let pan = buttons.pressed(MouseButton::Right)
+            || (shift && buttons.any_pressed([MouseButton::Left, MouseButton::Middle]));
+        if pan {
+            let right = transform.right();
+            let up = transform.up();
+            orbit.focus += (-*right * delta.x + *up * delta.y) * pan_scale;
+        } else {
+            orbit.yaw -= delta.x * 0.008;
+            orbit.pitch = (orbit.pitch + delta.y * 0.008).clamp(-1.55, 1.55);
+        }
+    }
+    for w in wheel.read() {
+        if !over.0 {
+            continue;
+        }
+        match w.unit {
+            MouseScrollUnit::Line => orbit.distance *= 0.9_f32.powf(w.y),
+            MouseScrollUnit::Pixel => {
+                // Trackpad two-finger scroll: orbit, or pan with Shift.
+                if shift {
+                    let right = transform.right();
+                    let up = transform.up();
+                    orbit.focus += (-*right * w.x + *up * w.y) * pan_scale;
+                } else {
+                    orbit.yaw += w.x * 0.005;
+                    orbit.pitch = (orbit.pitch + w.y * 0.005).clamp(-1.55, 1.55);
+                }
+            }
+        }
+    }
+    for p in pinch.read() {
+        if over.0 {
+            orbit.distance *= 1.0 - p.0.clamp(-0.5, 0.5);
+        }
+    }
+    orbit.distance = orbit.distance.clamp(1e-3, 1e4);
+    let wanted = orbit.transform();
+    if *transform != wanted {
+        *transform = wanted;
+    }
+}
+
+/// A request from the View menu to frame the selection (as F does).
+#[derive(Resource, Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct FrameRequest(pub bool);
+
+/// F frames the selected node (a mesh's deformed bounds, a tool's or volume's handles), or
+/// every mesh when nothing is selected.
+#[allow(clippy::type_complexity)]
+pub fn frame_selected(
+    keys: Res<ButtonInput<KeyCode>>,
+    keyboard: Res<KeyboardToViewport>,
+    mut request: ResMut<FrameRequest>,
+    selection: Res<Selection>,
+    entities: Res<NodeEntities>,
+    meshes: Query<(&bevy::camera::primitives::Aabb, &GlobalTransform), With<MeshEvaluation>>,
+    handles: Query<(&HandleMarker, &GlobalTransform)>,
+    mut cameras: Query<(&mut OrbitCamera, &Projection)>,
+) {
+    let asked = std::mem::take(&mut request.0);
+    if !asked && !(keyboard.0 && keys.just_pressed(KeyCode::KeyF)) {
+        return;
+    }
+    let Ok((mut orbit, projection)) = cameras.single_mut() else {
+        return;
+    };
+    let fov = match projection {
+        Projection::Perspective(p) => p.fov,
+        _ => std::f32::consts::FRAC_PI_4,
+    };
+    if let Some((min, max)) = selection_bounds(&selection, &entities, &meshes, &handles) {
+        orbit.frame(min, max, fov);
+    }
+}
+
+/// The world bounds of what F frames.
+#[allow(clippy::type_complexity)]
+pub fn selection_bounds(
+    selection: &Selection,
+    entities: &NodeEntities,
+    meshes: &Query<(&bevy::camera::primitives::Aabb, &GlobalTransform), With<MeshEvaluation>>,
+    handles: &Query<(&HandleMarker, &GlobalTransform)>,
+) -> Option<(Vec3, Vec3)> {
+    let mut points: Vec<Vec3> = Vec::new();
+    let mut add_mesh = |aabb: &bevy::camera::primitives::Aabb, at: &GlobalTransform| {
+        let (c, h) = (Vec3::from(aabb.center), Vec3::from(aabb.half_extents));
+        for s in [-1.0, 1.0] {
+            for t in [-1.0, 1.0] {
+                for u in [-1.0, 1.0] {
+                    points.push(at.transform_point(c + h * Vec3::new(s, t, u)));
+                }
+            }
+        }
+    };
+    match &selection.node {
+        Some(name) => {
+            if let Some(e) = entities.get(name)
+                && let Ok((aabb, at)) = meshes.get(e)
+            {
+                add_mesh(aabb, at);
+            }
+            for (marker, at) in handles {
+                if &marker.node == name {
+                    points.push(at.translation());
+                }
+            }
+        }
+        None => {
+            for (aabb, at) in meshes {
+                add_mesh(aabb, at);
+            }
+        }
+    }
+    let first = *points.first()?;
+    let (mut min, mut max) = (first, first);
+    for p in &points {
+        min = min.min(*p);
+        max = max.max(*p);
+    }
+    if min == max {
+        // A single point: frame a small box around it.
+        min -= Vec3::splat(0.05);
+        max += Vec3::splat(0.05);
+    }
+    Some((min, max))
+}

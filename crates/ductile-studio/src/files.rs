@@ -1,0 +1,315 @@
+//! File and edit actions (menus and shortcuts) and the file dialogs (egui-file-dialog, no
+//! GTK): New, Open, Save, Save As, Import mesh, Export glTF, Undo, Redo, Delete, Quit.
+
+use std::path::PathBuf;
+
+use bevy::prelude::*;
+use bevy_egui::egui;
+use ductile_bevy::prelude::*;
+use ductile_history::operation::Operation;
+use ductile_io::project::Project;
+use egui_file_dialog::FileDialog;
+
+use crate::studio::{FramePending, Notices, OpenProject};
+
+/// Something the user asked for from a menu or a shortcut.
+#[derive(Message, Debug, Clone, PartialEq, Eq)]
+pub enum StudioAction {
+    /// Start an empty scene.
+    New,
+    /// Choose a scene or history file to open.
+    Open,
+    /// Open this file.
+    OpenPath(PathBuf),
+    /// Save to the project's file (or ask where, the first time).
+    Save,
+    /// Choose where to save.
+    SaveAs,
+    /// Save to this file.
+    SaveAsPath(PathBuf),
+    /// Choose a mesh to import.
+    ImportMesh,
+    /// Import this mesh file.
+    ImportPath(PathBuf),
+    /// Choose where to export.
+    ExportGltf,
+    /// Export the deformed meshes to this file.
+    ExportPath(PathBuf),
+    /// Undo the last step.
+    Undo,
+    /// Redo the next step.
+    Redo,
+    /// Remove the selected node (and the layers and references that use it).
+    Delete,
+    /// Frame the selection.
+    FrameSelected,
+    /// Leave the Studio.
+    Quit,
+    /// Carry out this action even though the document has unsaved changes.
+    Discard(Box<StudioAction>),
+}
+
+/// Which dialog is open and for what.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DialogPurpose {
+    /// Open a scene or history.
+    Open,
+    /// Save the scene.
+    SaveAs,
+    /// Import a mesh.
+    Import,
+    /// Export glTF.
+    Export,
+}
+
+/// The file dialog and the question about unsaved changes.
+#[derive(Resource, Default)]
+pub struct FileDialogs {
+    /// The open dialog and its purpose.
+    pub dialog: Option<(DialogPurpose, FileDialog)>,
+    /// An action waiting for "discard unsaved changes?".
+    pub confirm: Option<StudioAction>,
+}
+
+impl FileDialogs {
+    fn open(&mut self, purpose: DialogPurpose, dir: Option<PathBuf>) {
+        let mut d = FileDialog::new().default_size([720.0, 460.0]);
+        if let Some(dir) = dir {
+            d = d.initial_directory(dir);
+        }
+        d = match purpose {
+            DialogPurpose::Open => d
+                .title("Open scene or history")
+                .add_file_filter_extensions("Scenes and histories (.ron)", vec!["ron"])
+                .default_file_filter("Scenes and histories (.ron)"),
+            DialogPurpose::SaveAs => d
+                .title("Save scene (its history is saved beside it)")
+                .add_save_extension("Scene (.ron)", "ron")
+                .default_save_extension("Scene (.ron)")
+                .default_file_name("scene.ron"),
+            DialogPurpose::Import => d
+                .title("Import mesh (glTF or OBJ)")
+                .add_file_filter_extensions("Meshes (.glb, .gltf, .obj)", vec!["glb", "gltf", "obj"])
+                .default_file_filter("Meshes (.glb, .gltf, .obj)"),
+            DialogPurpose::Export => d
+                .title("Export deformed meshes as glTF")
+                .add_save_extension("glTF binary (.glb)", "glb")
+                .default_save_extension("glTF binary (.glb)")
+                .default_file_name("deformed.glb"),
+        };
+        match purpose {
+            DialogPurpose::Open | DialogPurpose::Import => d.pick_file(),
+            DialogPurpose::SaveAs | DialogPurpose::Export => d.save_file(),
+        }
+        self.dialog = Some((purpose, d));
+    }
+
+    /// Shows the dialog and the unsaved-changes question; returns what the user chose.
+    pub fn show(&mut self, ctx: &egui::Context) -> Option<StudioAction> {
+        let mut chosen = None;
+        if let Some((purpose, dialog)) = &mut self.dialog {
+            dialog.update(ctx);
+            if let Some(path) = dialog.take_picked() {
+                chosen = Some(match purpose {
+                    DialogPurpose::Open => StudioAction::OpenPath(path),
+                    DialogPurpose::SaveAs => StudioAction::SaveAsPath(path),
+                    DialogPurpose::Import => StudioAction::ImportPath(path),
+                    DialogPurpose::Export => StudioAction::ExportPath(path),
+                });
+                self.dialog = None;
+            } else if matches!(
+                dialog.state(),
+                egui_file_dialog::DialogState::Closed | egui_file_dialog::DialogState::Cancelled
+            ) {
+                self.dialog = None;
+            }
+        }
+        if let Some(action) = self.confirm.clone() {
+            egui::Window::new("Unsaved changes")
+                .collapsible(false)
+                .resizable(false)
+                .anchor(egui::Align2::CENTER_CENTER, [0.0, 0.0])
+                .show(ctx, |ui| {
+                    ui.label("The scene has unsaved changes. Discard them?");
+                    ui.horizontal(|ui| {
+                        if ui.button("Discard").clicked() {
+                            chosen = Some(StudioAction::Discard(Box::new(action.clone())));
+                            self.confirm = None;
+                        }
+                        if ui.button("Cancel").clicked() {
+                            self.confirm = None;
+                        }
+                    });
+                });
+        }
+        chosen
+    }
+}
+
+/// Carries out file and edit actions.
+#[allow(clippy::too_many_arguments)]
+pub fn run_actions(
+    mut actions: MessageReader<StudioAction>,
+    mut doc: ResMut<SceneDocument>,
+    mut project: ResMut<OpenProject>,
+    mut rests: ResMut<RestMeshes>,
+    mut selection: ResMut<Selection>,
+    mut dialogs: ResMut<FileDialogs>,
+    mut notices: ResMut<Notices>,
+    mut frame: ResMut<FramePending>,
+    mut frame_selected: ResMut<crate::camera::FrameRequest>,
+    mut edits: MessageWriter<DocumentCommand>,
+    mut exit: MessageWriter<AppExit>,
+) {
+    let actions: Vec<StudioAction> = actions.read().cloned().collect();
+    for action in actions {
+        let (action, confirmed) = match action {
+            StudioAction::Discard(a) => (*a, true),
+            a => (a, false),
+        };
+        let project_dir = project.0.path().and_then(|p| p.parent()).map(PathBuf::from);
+        let needs_confirm = matches!(
+            action,
+            StudioAction::New | StudioAction::Open | StudioAction::OpenPath(_) | StudioAction::Quit
+        );
+        if needs_confirm && doc.is_modified() && !confirmed {
+            dialogs.confirm = Some(action);
+            continue;
+        }
+        let mut notice = |r: Result<String, String>| match r {
+            Ok(text) => {
+                info!("{text}");
+                notices.0.push(text);
+            }
+            Err(text) => {
+                error!("{text}");
+                notices.0.push(text);
+            }
+        };
+        match action {
+            StudioAction::New => {
+                replace_project(
+                    Project::new_empty(),
+                    &mut doc,
+                    &mut project,
+                    &mut rests,
+                    &mut selection,
+                    &mut frame,
+                );
+            }
+            StudioAction::Open => dialogs.open(DialogPurpose::Open, project_dir),
+            StudioAction::OpenPath(path) => match Project::open(&path) {
+                Ok((p, warnings)) => {
+                    replace_project(p, &mut doc, &mut project, &mut rests, &mut selection, &mut frame);
+                    for w in warnings {
+                        notice(Err(w.to_string()));
+                    }
+                    notice(Ok(format!("opened {}", path.display())));
+                }
+                Err(e) => notice(Err(ductile_io::report(&e))),
+            },
+            StudioAction::Save => {
+                if project.0.path().is_none() {
+                    dialogs.open(DialogPurpose::SaveAs, project_dir);
+                } else {
+                    project.0.set_state(doc.document().clone(), doc.history().clone());
+                    match project.0.save() {
+                        Ok(()) => {
+                            doc.mark_saved();
+                            notice(Ok(format!("saved {}", project.0.display_name())));
+                        }
+                        Err(e) => notice(Err(ductile_io::report(&e))),
+                    }
+                }
+            }
+            StudioAction::SaveAs => dialogs.open(DialogPurpose::SaveAs, project_dir),
+            StudioAction::SaveAsPath(path) => {
+                project.0.set_state(doc.document().clone(), doc.history().clone());
+                match project.0.save_as(&path) {
+                    Ok(()) => {
+                        // Mesh sources may have been rewritten relative to the new place.
+                        let (document, history) =
+                            (project.0.document().clone(), project.0.history().clone());
+                        if &document != doc.document() || &history != doc.history() {
+                            doc.replace(history, document);
+                        }
+                        doc.mark_saved();
+                        notice(Ok(format!("saved {}", path.display())));
+                    }
+                    Err(e) => notice(Err(ductile_io::report(&e))),
+                }
+            }
+            StudioAction::ImportMesh => dialogs.open(DialogPurpose::Import, project_dir),
+            StudioAction::ImportPath(path) => {
+                project.0.set_state(doc.document().clone(), doc.history().clone());
+                match project.0.import_mesh(&path) {
+                    Ok(imported) => {
+                        if let ductile_scene::document::NodeKind::Mesh(m) = &imported.node.kind {
+                            rests.insert(m.source.clone(), (*imported.rest).clone());
+                        }
+                        selection.node = Some(imported.node.name.clone());
+                        let op = Operation::add_node(doc.document(), imported.node);
+                        edits.write(DocumentCommand::Apply {
+                            op,
+                            label: format!("import {}", path.display()),
+                            gesture: None,
+                        });
+                        frame.0 = true;
+                    }
+                    Err(e) => notice(Err(ductile_io::report(&e))),
+                }
+            }
+            StudioAction::ExportGltf => dialogs.open(DialogPurpose::Export, project_dir),
+            StudioAction::ExportPath(path) => {
+                project.0.set_state(doc.document().clone(), doc.history().clone());
+                match project.0.export_gltf(&path) {
+                    Ok(()) => notice(Ok(format!("exported {}", path.display()))),
+                    Err(e) => notice(Err(ductile_io::report(&e))),
+                }
+            }
+            StudioAction::Undo => {
+                edits.write(DocumentCommand::Undo);
+            }
+            StudioAction::Redo => {
+                edits.write(DocumentCommand::Redo);
+            }
+            StudioAction::Delete => {
+                if let Some(name) = selection.node.clone() {
+                    match Operation::remove_node_and_references(doc.document(), &name) {
+                        Ok(op) => {
+                            edits.write(DocumentCommand::Apply {
+                                op,
+                                label: format!("delete '{name}'"),
+                                gesture: None,
+                            });
+                            selection.node = None;
+                            selection.layer = None;
+                        }
+                        Err(e) => notice(Err(e.to_string())),
+                    }
+                }
+            }
+            StudioAction::FrameSelected => frame_selected.0 = true,
+            StudioAction::Quit => {
+                exit.write(AppExit::Success);
+            }
+            StudioAction::Discard(_) => {}
+        }
+    }
+}
+
+fn replace_project(
+    p: Project,
+    doc: &mut SceneDocument,
+    project: &mut OpenProject,
+    rests: &mut RestMeshes,
+    selection: &mut Selection,
+    frame: &mut FramePending,
+) {
+    doc.replace(p.history().clone(), p.document().clone());
+    doc.mark_saved();
+    rests.clear();
+    *selection = Selection::default();
+    frame.0 = true;
+    project.0 = p;
+}

@@ -1,0 +1,98 @@
+//! Ductile Studio: the interactive editor for non-destructive mesh deformation.
+//!
+//! `ductile-studio` opens the embedded identikit head scene; `--scene FILE` opens a scene
+//! or history file; `--screenshot OUT.png [--frames N]` renders N frames, writes a PNG and
+//! exits (for automated checks, also under `xvfb-run` with software Vulkan).
+
+mod camera;
+mod files;
+mod panels;
+mod screenshot;
+mod studio;
+mod ui;
+
+use std::path::PathBuf;
+
+use anyhow::Context as _;
+use bevy::prelude::*;
+use bevy::window::WindowResolution;
+use clap::Parser;
+use ductile_io::project::Project;
+
+/// Command-line arguments.
+#[derive(Parser, Debug)]
+#[command(name = "ductile-studio", version, about = "Ductile Studio: non-destructive mesh deformation")]
+struct Args {
+    /// A scene (`.ron`) or history (`.history.ron`) file to open instead of the embedded
+    /// identikit head.
+    #[arg(long, value_name = "FILE")]
+    scene: Option<PathBuf>,
+    /// Render, save a PNG screenshot of the window to this path and exit.
+    #[arg(long, value_name = "OUT.png")]
+    screenshot: Option<PathBuf>,
+    /// Frames to run before the screenshot is taken.
+    #[arg(long, default_value_t = 30, requires = "screenshot")]
+    frames: u32,
+    /// Window size in logical pixels, `WIDTHxHEIGHT`.
+    #[arg(long, default_value = "1280x800", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Select this node when the scene opens (its gizmo and handles are highlighted).
+    #[arg(long, value_name = "NODE")]
+    select: Option<String>,
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("'{s}': expected WIDTHxHEIGHT, for example 1280x800"))?;
+    let w: u32 = w.trim().parse().map_err(|_| format!("'{s}': bad width"))?;
+    let h: u32 = h.trim().parse().map_err(|_| format!("'{s}': bad height"))?;
+    if !(200..=8192).contains(&w) || !(200..=8192).contains(&h) {
+        return Err(format!("'{s}': width and height must be in 200..=8192"));
+    }
+    Ok((w, h))
+}
+
+fn main() -> anyhow::Result<()> {
+    let args = Args::parse();
+    // Open the project before the window, so that a bad file is a clear error and no window.
+    let (project, warnings) = match &args.scene {
+        Some(path) => Project::open(path)
+            .with_context(|| format!("cannot open '{}'", path.display()))?,
+        None => (
+            Project::embedded_default().context("cannot open the embedded identikit scene")?,
+            Vec::new(),
+        ),
+    };
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    if let Some(out) = &args.screenshot {
+        screenshot::check_writable(out)?;
+    }
+    let title = format!("Ductile Studio — {}", project.display_name());
+    let mut app = App::new();
+    app.add_plugins(DefaultPlugins.set(WindowPlugin {
+        primary_window: Some(Window {
+            title,
+            resolution: WindowResolution::new(args.size.0, args.size.1),
+            ..default()
+        }),
+        ..default()
+    }))
+    .add_plugins(studio::StudioPlugin {
+        project,
+        warnings: warnings.iter().map(ToString::to_string).collect(),
+        select: args.select.clone(),
+    });
+    if let Some(out) = args.screenshot {
+        app.add_plugins(screenshot::ScreenshotPlugin {
+            path: out,
+            frames: args.frames,
+        });
+    }
+    match app.run() {
+        AppExit::Success => Ok(()),
+        AppExit::Error(code) => std::process::exit(i32::from(code.get())),
+    }
+}

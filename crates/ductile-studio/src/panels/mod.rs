@@ -1,0 +1,70 @@
+//! The Studio's panels, one struct and file per panel (like egui_demo_lib). Panels read the
+//! document and emit [`DocumentCommand`]s into [`PanelContext::commands`]; they never
+//! mutate the document.
+
+pub mod history;
+pub mod inspector;
+pub mod macros;
+pub mod menu_bar;
+pub mod outliner;
+pub mod stack;
+pub mod status_bar;
+
+use bevy_egui::egui;
+use ductile_bevy::prelude::*;
+use ductile_history::operation::Operation;
+
+/// What every panel may read and the edits it may ask for.
+pub struct PanelContext<'a> {
+    /// The document (read only).
+    pub doc: &'a SceneDocument,
+    /// The selection (view state, edited directly).
+    pub selection: &'a mut Selection,
+    /// Edits requested this frame, applied after the UI pass.
+    pub commands: Vec<DocumentCommand>,
+    /// Source of gesture ids for sliders and drags.
+    pub gestures: &'a mut Gestures,
+}
+
+impl PanelContext<'_> {
+    /// Requests `op` as its own undo step.
+    pub fn apply(&mut self, op: Operation) {
+        self.commands.push(DocumentCommand::apply(op));
+    }
+
+    /// Requests `op` as part of the gesture of widget `id` (a slider being dragged): the
+    /// gesture's edits become one undo step.
+    pub fn apply_in_gesture(&mut self, response: &egui::Response, op: Operation, label: String) {
+        let gesture = self.gestures.for_widget(response);
+        self.commands.push(DocumentCommand::Apply { op, label, gesture });
+    }
+}
+
+/// Gesture ids for widgets: a slider drag keeps one id from press to release, so its edits
+/// merge into one undo step; a keyboard change is its own step.
+#[derive(bevy::prelude::Resource, Debug, Default)]
+pub struct Gestures {
+    next: u64,
+    current: Option<(egui::Id, u64)>,
+}
+
+impl Gestures {
+    /// The gesture of the widget behind `response`, new when its drag started or another
+    /// widget had the last one.
+    pub fn for_widget(&mut self, response: &egui::Response) -> Option<u64> {
+        let dragging = response.dragged() || response.drag_stopped();
+        match self.current {
+            Some((id, g)) if id == response.id && dragging && !response.drag_started() => Some(g),
+            _ if dragging => {
+                self.next += 1;
+                let g = (1 << 48) + self.next;
+                self.current = Some((response.id, g));
+                Some(g)
+            }
+            _ => {
+                self.current = None;
+                None
+            }
+        }
+    }
+}

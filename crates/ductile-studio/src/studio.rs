@@ -1,0 +1,304 @@
+//! The Studio plugin: window contents (camera, lights, grid, wireframe), rest-mesh loading
+//! through the project, keyboard shortcuts and the first framing of the scene.
+
+use bevy::camera::Viewport;
+use bevy::core_pipeline::tonemapping::Tonemapping;
+use bevy::pbr::wireframe::{WireframeConfig, WireframePlugin};
+use bevy::picking::mesh_picking::MeshPickingPlugin;
+use bevy::prelude::*;
+use bevy_egui::{EguiPlugin, EguiPrimaryContextPass};
+use ductile_bevy::prelude::*;
+use ductile_io::project::Project;
+
+use crate::camera::{
+    KeyboardToViewport, OrbitCamera, PointerOverViewport, frame_selected, orbit_camera,
+    selection_bounds,
+};
+use crate::files::{FileDialogs, StudioAction, run_actions};
+use crate::panels::Gestures;
+use crate::panels::menu_bar::ViewOptions;
+use crate::ui::{PanelState, ViewportRect, studio_ui};
+
+/// The Studio around the [`DuctilePlugin`].
+pub struct StudioPlugin {
+    /// The project to open.
+    pub project: Project,
+    /// Warnings from opening it (shown in the status bar).
+    pub warnings: Vec<String>,
+    /// A node to select at start.
+    pub select: Option<String>,
+}
+
+/// The open project: where it is saved, its mesh sources (the live document and history are
+/// in [`SceneDocument`]; the project receives them when saving).
+#[derive(Resource)]
+pub struct OpenProject(pub Project);
+
+/// Messages for the user (errors of file operations, warnings), newest last.
+#[derive(Resource, Debug, Default, Clone)]
+pub struct Notices(pub Vec<String>);
+
+/// Frame every mesh once its evaluation exists (after opening a project).
+#[derive(Resource, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FramePending(pub bool);
+
+impl Plugin for StudioPlugin {
+    fn build(&self, app: &mut App) {
+        let project = self.project.clone();
+        let doc = SceneDocument::with_history(project.history().clone(), project.document().clone());
+        app.add_plugins((
+            EguiPlugin::default(),
+            MeshPickingPlugin,
+            WireframePlugin::default(),
+            DuctilePlugin,
+        ))
+        .insert_resource(doc)
+        .insert_resource(OpenProject(project))
+        .insert_resource(Notices(self.warnings.clone()))
+        .insert_resource(FramePending(true))
+        .insert_resource(ClearColor(Color::srgb(0.16, 0.17, 0.19)))
+        .insert_resource(Selection {
+            node: self.select.clone(),
+            layer: None,
+        })
+        .init_resource::<ViewOptions>()
+        .init_resource::<PointerOverViewport>()
+        .init_resource::<KeyboardToViewport>()
+        .init_resource::<ViewportRect>()
+        .init_resource::<PanelState>()
+        .init_resource::<Gestures>()
+        .init_resource::<FileDialogs>()
+        .init_resource::<crate::camera::FrameRequest>()
+        .add_message::<StudioAction>()
+        .add_systems(Startup, setup)
+        .add_systems(EguiPrimaryContextPass, studio_ui)
+        .add_systems(
+            Update,
+            (
+                (shortcuts, run_actions).chain().before(DuctileSystems::Input),
+                load_rest_meshes.before(DuctileSystems::Evaluate).after(DuctileSystems::Sync),
+                (orbit_camera, frame_selected, frame_on_open)
+                    .chain()
+                    .after(DuctileSystems::Evaluate),
+                (apply_viewport, draw_grid, apply_wireframe, window_title),
+            ),
+        );
+    }
+}
+
+fn setup(mut commands: Commands) {
+    let orbit = OrbitCamera {
+        focus: Vec3::ZERO,
+        yaw: 0.35,
+        pitch: 0.15,
+        distance: 1.0,
+    };
+    commands.spawn((
+        Camera3d::default(),
+        Tonemapping::None,
+        orbit,
+        orbit.transform(),
+        Projection::Perspective(PerspectiveProjection {
+            fov: 35_f32.to_radians(),
+            near: 0.001,
+            ..default()
+        }),
+    ));
+    commands.insert_resource(GlobalAmbientLight {
+        color: Color::WHITE,
+        brightness: 250.0,
+        ..default()
+    });
+    // A key light over the viewer's shoulder and a dimmer fill light from the other side.
+    commands.spawn((
+        DirectionalLight {
+            illuminance: 6_000.0,
+            ..default()
+        },
+        Transform::from_xyz(1.0, 2.0, 2.5).looking_at(Vec3::ZERO, Vec3::Y),
+    ));
+    commands.spawn((
+        DirectionalLight {
+            illuminance: 1_800.0,
+            ..default()
+        },
+        Transform::from_xyz(-2.0, 0.5, -1.0).looking_at(Vec3::ZERO, Vec3::Y),
+    ));
+}
+
+/// Loads the rest mesh of every mesh source the document needs, through the project
+/// (files relative to the project, or the embedded head).
+fn load_rest_meshes(
+    doc: Res<SceneDocument>,
+    mut project: ResMut<OpenProject>,
+    mut rests: ResMut<RestMeshes>,
+    mut notices: ResMut<Notices>,
+) {
+    if !doc.is_changed() && !rests.is_changed() {
+        return;
+    }
+    let missing = rests.missing(doc.document());
+    for source in missing {
+        let node = doc.document().nodes.iter().find(|n| {
+            matches!(&n.kind, ductile_scene::document::NodeKind::Mesh(m) if m.source == source)
+        });
+        let Some(node) = node else { continue };
+        match project.0.rest_mesh(&node.name) {
+            Ok(rest) => rests.insert(source, (*rest).clone()),
+            Err(e) => {
+                let text = ductile_io::report(&e);
+                notices.0.push(text.clone());
+                rests.insert_failure(source, text);
+            }
+        }
+    }
+}
+
+/// Keyboard shortcuts (ignored while a text field has the keyboard).
+fn shortcuts(
+    keys: Res<ButtonInput<KeyCode>>,
+    keyboard: Res<KeyboardToViewport>,
+    drag: Res<DragState>,
+    mut actions: MessageWriter<StudioAction>,
+) {
+    if !keyboard.0 {
+        return;
+    }
+    let ctrl = keys.any_pressed([KeyCode::ControlLeft, KeyCode::ControlRight, KeyCode::SuperLeft]);
+    let shift = keys.any_pressed([KeyCode::ShiftLeft, KeyCode::ShiftRight]);
+    let pressed = |k| keys.just_pressed(k);
+    let action = if ctrl && pressed(KeyCode::KeyZ) && shift || ctrl && pressed(KeyCode::KeyY) {
+        Some(StudioAction::Redo)
+    } else if ctrl && pressed(KeyCode::KeyZ) {
+        Some(StudioAction::Undo)
+    } else if ctrl && shift && pressed(KeyCode::KeyS) {
+        Some(StudioAction::SaveAs)
+    } else if ctrl && pressed(KeyCode::KeyS) {
+        Some(StudioAction::Save)
+    } else if ctrl && pressed(KeyCode::KeyO) {
+        Some(StudioAction::Open)
+    } else if ctrl && pressed(KeyCode::KeyN) {
+        Some(StudioAction::New)
+    } else if ctrl && pressed(KeyCode::KeyI) {
+        Some(StudioAction::ImportMesh)
+    } else if ctrl && pressed(KeyCode::KeyE) {
+        Some(StudioAction::ExportGltf)
+    } else if ctrl && pressed(KeyCode::KeyQ) {
+        Some(StudioAction::Quit)
+    } else if (pressed(KeyCode::Delete) || pressed(KeyCode::Backspace)) && drag.active.is_none() {
+        Some(StudioAction::Delete)
+    } else {
+        None
+    };
+    if let Some(a) = action {
+        actions.write(a);
+    }
+}
+
+/// Frames every mesh once, after a project opened and its meshes evaluated.
+#[allow(clippy::type_complexity)]
+fn frame_on_open(
+    mut pending: ResMut<FramePending>,
+    entities: Res<NodeEntities>,
+    meshes: Query<(&bevy::camera::primitives::Aabb, &GlobalTransform), With<MeshEvaluation>>,
+    handles: Query<(&HandleMarker, &GlobalTransform)>,
+    mut cameras: Query<(&mut OrbitCamera, &Projection)>,
+) {
+    if !pending.0 || meshes.is_empty() {
+        return;
+    }
+    let Ok((mut orbit, projection)) = cameras.single_mut() else {
+        return;
+    };
+    let fov = match projection {
+        Projection::Perspective(p) => p.fov,
+        _ => std::f32::consts::FRAC_PI_4,
+    };
+    let everything = Selection::default();
+    if let Some((min, max)) = selection_bounds(&everything, &entities, &meshes, &handles) {
+        orbit.frame(min, max, fov);
+        pending.0 = false;
+    }
+}
+
+/// Renders the 3-D view only in the part of the window the panels leave free.
+fn apply_viewport(
+    rect: Res<ViewportRect>,
+    windows: Query<&Window, With<bevy::window::PrimaryWindow>>,
+    mut cameras: Query<&mut Camera, With<Camera3d>>,
+) {
+    let (Ok(window), Ok(mut camera)) = (windows.single(), cameras.single_mut()) else {
+        return;
+    };
+    let Some((min, max)) = rect.0 else { return };
+    let scale = window.scale_factor();
+    let size = UVec2::new(window.physical_width(), window.physical_height());
+    let pos = (min * scale).as_uvec2().min(size.saturating_sub(UVec2::ONE));
+    let end = (max * scale).as_uvec2().min(size);
+    let wanted = Viewport {
+        physical_position: pos,
+        physical_size: end.saturating_sub(pos).max(UVec2::ONE),
+        ..default()
+    };
+    if camera.viewport.as_ref() != Some(&wanted) {
+        camera.viewport = Some(wanted);
+    }
+}
+
+/// The ground grid: 1 cm cells over 1 m, at the lowest point of the meshes.
+fn draw_grid(
+    view: Res<ViewOptions>,
+    meshes: Query<(&bevy::camera::primitives::Aabb, &GlobalTransform), With<MeshEvaluation>>,
+    mut gizmos: Gizmos,
+) {
+    if !view.grid {
+        return;
+    }
+    let floor = meshes
+        .iter()
+        .map(|(aabb, at)| at.transform_point(Vec3::from(aabb.center - aabb.half_extents)).y)
+        .fold(f32::INFINITY, f32::min);
+    let floor = if floor.is_finite() { floor } else { 0.0 };
+    let rotation = Quat::from_rotation_x(std::f32::consts::FRAC_PI_2);
+    gizmos.grid(
+        Isometry3d::new(Vec3::new(0.0, floor, 0.0), rotation),
+        UVec2::splat(20),
+        Vec2::splat(0.05),
+        Color::srgba(0.6, 0.6, 0.65, 0.35),
+    );
+}
+
+fn apply_wireframe(
+    view: Res<ViewOptions>,
+    config: Option<ResMut<WireframeConfig>>,
+    mut gizmo_settings: ResMut<GizmoSettings>,
+) {
+    if gizmo_settings.enabled != view.gizmos {
+        gizmo_settings.enabled = view.gizmos;
+    }
+    if let Some(mut config) = config
+        && config.global != view.wireframe
+    {
+        config.global = view.wireframe;
+    }
+}
+
+fn window_title(
+    doc: Res<SceneDocument>,
+    project: Res<OpenProject>,
+    mut windows: Query<&mut Window, With<bevy::window::PrimaryWindow>>,
+) {
+    if !doc.is_changed() && !project.is_changed() {
+        return;
+    }
+    if let Ok(mut window) = windows.single_mut() {
+        let title = format!(
+            "Ductile Studio — {}{}",
+            project.0.display_name(),
+            if doc.is_modified() { " •" } else { "" }
+        );
+        if window.title != title {
+            window.title = title;
+        }
+    }
+}

@@ -1,0 +1,231 @@
+//! The Studio's egui pass: menu bar, left panel (outliner, stack, history), right panel
+//! (inspector, identikit macros), status bar, dialogs; then the free rectangle left for the
+//! 3-D viewport.
+
+use bevy::ecs::system::SystemParam;
+use bevy::prelude::*;
+use bevy_egui::{EguiContexts, egui};
+use ductile_bevy::prelude::*;
+
+use crate::camera::{KeyboardToViewport, PointerOverViewport};
+use crate::files::{FileDialogs, StudioAction};
+use crate::panels::history::HistoryPanel;
+use crate::panels::inspector::Inspector;
+use crate::panels::macros::MacrosPanel;
+use crate::panels::menu_bar::{MenuAction, MenuBar, ViewOptions};
+use crate::panels::outliner::Outliner;
+use crate::panels::stack::StackPanel;
+use crate::panels::status_bar::{StatusBar, StatusInfo};
+use crate::panels::{Gestures, PanelContext};
+use crate::studio::{Notices, OpenProject};
+
+/// The panels' own state.
+#[derive(Resource, Default)]
+pub struct PanelState {
+    menu: MenuBar,
+    outliner: Outliner,
+    stack: StackPanel,
+    history: HistoryPanel,
+    inspector: Inspector,
+    macros: MacrosPanel,
+    status: StatusBar,
+    frame_ms: Option<f64>,
+}
+
+/// The window rectangle (logical pixels) not covered by panels: where the 3-D view draws.
+#[derive(Resource, Debug, Default, Clone, Copy, PartialEq)]
+pub struct ViewportRect(pub Option<(Vec2, Vec2)>);
+
+/// Read-only resources the UI shows.
+#[derive(SystemParam)]
+pub struct UiInputs<'w, 's> {
+    doc: Res<'w, SceneDocument>,
+    stats: Res<'w, EvaluationStats>,
+    edit: Res<'w, EditStatus>,
+    drag: Res<'w, DragState>,
+    project: Res<'w, OpenProject>,
+    time: Res<'w, Time>,
+    notices: Res<'w, Notices>,
+    evaluations: Query<'w, 's, &'static MeshEvaluation>,
+}
+
+/// Draws every panel and forwards what they asked for.
+#[allow(clippy::too_many_arguments)]
+pub fn studio_ui(
+    mut contexts: EguiContexts,
+    inputs: UiInputs,
+    mut panels: ResMut<PanelState>,
+    mut selection: ResMut<Selection>,
+    mut gestures: ResMut<Gestures>,
+    mut view: ResMut<ViewOptions>,
+    mut heat: ResMut<HeatMapSettings>,
+    mut dialogs: ResMut<FileDialogs>,
+    mut viewport: ResMut<ViewportRect>,
+    mut over: ResMut<PointerOverViewport>,
+    mut keyboard: ResMut<KeyboardToViewport>,
+    mut edits: MessageWriter<DocumentCommand>,
+    mut actions: MessageWriter<StudioAction>,
+) -> Result {
+    let ctx = contexts.ctx_mut()?.clone();
+    let panels = &mut *panels;
+    let dt = f64::from(inputs.time.delta_secs()) * 1000.0;
+    if dt > 0.0 {
+        panels.frame_ms = Some(panels.frame_ms.map_or(dt, |f| f * 0.9 + dt * 0.1));
+    }
+    let mut root = egui::Ui::new(
+        ctx.clone(),
+        "studio-root".into(),
+        egui::UiBuilder::new()
+            .layer_id(egui::LayerId::background())
+            .max_rect(ctx.viewport_rect()),
+    );
+    let mut cx = PanelContext {
+        doc: &inputs.doc,
+        selection: &mut selection,
+        commands: Vec::new(),
+        gestures: &mut gestures,
+    };
+    let has_selection = cx.selection.node.is_some();
+
+    let mut menu_action = None;
+    let top = egui::Panel::top("menu-bar").show(&mut root, |ui| {
+        menu_action = panels
+            .menu
+            .show(ui, &inputs.doc, has_selection, &mut view, &mut heat);
+    });
+
+    let info = status_info(&inputs, panels.frame_ms);
+    let bottom = egui::Panel::bottom("status-bar").show(&mut root, |ui| {
+        panels.status.show(ui, &info);
+    });
+
+    let left = egui::Panel::left("left-panel")
+        .resizable(true)
+        .default_size(270.0)
+        .show(&mut root, |ui| {
+            ui.heading("Scene");
+            panels.outliner.show(ui, &mut cx);
+            ui.separator();
+            ui.heading("Stack");
+            panels.stack.show(ui, &mut cx);
+            ui.separator();
+            ui.heading("History");
+            panels.history.show(ui, &mut cx);
+        });
+
+    let right = egui::Panel::right("right-panel")
+        .resizable(true)
+        .default_size(300.0)
+        .show(&mut root, |ui| {
+            ui.heading("Inspector");
+            panels.inspector.show(ui, &mut cx);
+            ui.separator();
+            ui.heading("Identikit");
+            panels.macros.show(ui, &mut cx);
+        });
+
+    if let Some(a) = dialogs.show(&ctx) {
+        actions.write(a);
+    }
+
+    let commands = std::mem::take(&mut cx.commands);
+    for c in commands {
+        edits.write(c);
+    }
+    if let Some(a) = menu_action {
+        actions.write(match a {
+            MenuAction::New => StudioAction::New,
+            MenuAction::Open => StudioAction::Open,
+            MenuAction::Save => StudioAction::Save,
+            MenuAction::SaveAs => StudioAction::SaveAs,
+            MenuAction::ImportMesh => StudioAction::ImportMesh,
+            MenuAction::ExportGltf => StudioAction::ExportGltf,
+            MenuAction::Quit => StudioAction::Quit,
+            MenuAction::Undo => StudioAction::Undo,
+            MenuAction::Redo => StudioAction::Redo,
+            MenuAction::Delete => StudioAction::Delete,
+            MenuAction::FrameSelected => StudioAction::FrameSelected,
+        });
+    }
+
+    // The free rectangle between the panels.
+    let screen = ctx.viewport_rect();
+    let min = egui::pos2(left.response.rect.right(), top.response.rect.bottom());
+    let max = egui::pos2(right.response.rect.left(), bottom.response.rect.top());
+    let free = egui::Rect::from_min_max(min, max).intersect(screen);
+    let wanted = (free.width() > 8.0 && free.height() > 8.0)
+        .then(|| (Vec2::new(free.min.x, free.min.y), Vec2::new(free.max.x, free.max.y)));
+    if viewport.0 != wanted {
+        viewport.0 = wanted;
+    }
+    let pointer_in_free = ctx
+        .pointer_latest_pos()
+        .is_some_and(|p| free.contains(p));
+    // Over the free rectangle and not over a window (dialog, menu) on top of it.
+    let over_viewport = pointer_in_free
+        && ctx.pointer_latest_pos().is_some_and(|p| {
+            ctx.layer_id_at(p)
+                .is_none_or(|l| l.order == egui::Order::Background)
+        });
+    if over.0 != over_viewport {
+        over.0 = over_viewport;
+    }
+    let keys_free = !ctx.egui_wants_keyboard_input();
+    if keyboard.0 != keys_free {
+        keyboard.0 = keys_free;
+    }
+    Ok(())
+}
+
+fn status_info(inputs: &UiInputs, frame_ms: Option<f64>) -> StatusInfo {
+    let mut vertices = 0;
+    let mut triangles = 0;
+    let mut evaluating = false;
+    for ev in &inputs.evaluations {
+        let mesh = ev.rest().mesh();
+        match ev.evaluator().and_then(|e| e.deformed()) {
+            Some(d) => {
+                vertices += d.positions.len();
+                triangles += d
+                    .refined
+                    .as_ref()
+                    .map_or(mesh.triangle_count(), |r| r.stored_triangles.len());
+            }
+            None => {
+                vertices += mesh.positions.len();
+                triangles += mesh.triangle_count();
+            }
+        }
+        evaluating |= ev.is_running();
+    }
+    let error = inputs
+        .edit
+        .last_error
+        .clone()
+        .or_else(|| {
+            inputs
+                .stats
+                .errors
+                .first()
+                .map(|(m, e)| format!("mesh '{m}': {e}"))
+        })
+        .or_else(|| inputs.notices.0.last().cloned());
+    StatusInfo {
+        vertices,
+        triangles,
+        evaluation: inputs.stats.last.as_ref().map(|(m, r)| {
+            (
+                m.clone(),
+                r.duration.as_secs_f64() * 1000.0,
+                r.layers_evaluated,
+                r.background,
+            )
+        }),
+        frame_ms,
+        drag: inputs.drag.active.as_ref().map(|_| inputs.drag.constraint.label()),
+        evaluating,
+        error,
+        file: inputs.project.0.display_name(),
+        modified: inputs.doc.is_modified(),
+    }
+}
