@@ -124,8 +124,7 @@ pub enum NodeEdit {
 /// The handles of node `node`: its tool's handles ([`tool_handles`], tool nodes only), then
 /// its [`HandleId::Origin`]. Macro tools, volumes, meshes and groups have only the origin
 /// (a macro's points belong to the library, not to the node). Fails when the node does not
-/// exist or its tool is invalid where positions depend on it (a degenerate lattice or
-/// surface).
+/// exist or its tool is invalid.
 pub fn handles(doc: &Document, node: &str) -> Result<Vec<Handle>> {
     let n = doc.node(node)?;
     let mut out = match &n.kind {
@@ -163,31 +162,32 @@ pub fn moved(doc: &Document, node: &str, id: &HandleId, position: Vec3) -> Resul
         node: node.to_owned(),
         handle: id.to_string(),
     };
-    let current = handles(doc, node)?
+    if *id == HandleId::Origin {
+        return Ok(NodeEdit::Transform(Transform {
+            translation: position,
+            ..n.transform
+        }));
+    }
+    let NodeKind::Tool(tool) = &n.kind else {
+        return Err(no_handle());
+    };
+    let current = tool_handles(tool, node)?
         .into_iter()
         .find(|h| h.id == *id)
         .ok_or_else(no_handle)?;
-    match (&n.kind, id) {
-        (_, HandleId::Origin) => Ok(NodeEdit::Transform(Transform {
-            translation: position,
-            ..n.transform
-        })),
-        (NodeKind::Tool(tool), _) => {
-            if current.position == position {
-                return Ok(NodeEdit::Tool(tool.clone()));
-            }
-            let new = moved_tool(tool, id, position - current.position, position)
-                .ok_or_else(no_handle)?;
-            new.validate(node)?;
-            Ok(NodeEdit::Tool(new))
-        }
-        _ => Err(no_handle()),
+    if current.position == position {
+        return Ok(NodeEdit::Tool(tool.clone()));
     }
+    let new = moved_tool(tool, id, position - current.position, position).ok_or_else(no_handle)?;
+    new.validate(node)?;
+    Ok(NodeEdit::Tool(new))
 }
 
 /// The handles of a tool in the tool's own space, in picking order (see the module
-/// documentation). `what` names the tool in errors.
+/// documentation). The tool is validated first (`what` names it in errors), so every
+/// position is finite.
 pub fn tool_handles(tool: &Tool, what: &str) -> Result<Vec<Handle>> {
+    tool.validate(what)?;
     let mut out = Vec::new();
     let mut push = |id: HandleId, position: Vec3, role: HandleRole, radius: Option<f32>| {
         out.push(Handle {

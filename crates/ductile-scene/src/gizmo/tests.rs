@@ -172,6 +172,19 @@ fn lattice_points_edges_and_frame() {
             assert!(corners.iter().any(|&c| (p.z - c).abs() < 1e-6));
         }
     }
+    // Unmoved, every edge joins neighbours: one Greville step (2/2, 3/1, 2/3) along one axis.
+    let mut rest = t.clone();
+    rest.points.clear();
+    let g0 = tool_gizmo(&Tool::Lattice(rest), "l").unwrap();
+    for e in lines(&g0, Role::LatticeEdge) {
+        for w in e.points.windows(2) {
+            let d = (w[1] - w[0]).abs();
+            let steps = [1.0, 3.0, 2.0 / 3.0];
+            let axis = (0..3).find(|&a| d[a] > 1e-6).unwrap();
+            assert!((d[axis] - steps[axis]).abs() < 1e-5, "{d}");
+            assert!((d.length() - d[axis]).abs() < 1e-6, "{d}");
+        }
+    }
     // The moved point appears, displaced.
     assert!(
         points(&g, Role::ControlPoint)

@@ -242,3 +242,19 @@ fn epsilon_radius_is_where_the_weight_is_e_to_minus_half() {
     let p = ductile_core::ffsd::ControlPoint::basic(Vec3::ZERO, 1.0, 1e-3, 2.0);
     assert_eq!(epsilon_radius(&p), None);
 }
+
+#[test]
+fn an_invalid_tool_has_no_handles_but_an_error() {
+    let mut doc = document();
+    if let NodeKind::Tool(Tool::Ffsd(t)) = &mut doc.node_mut("ffsd").unwrap().kind {
+        t.points[0].position.x = f32::NAN;
+    }
+    let e = handles(&doc, "ffsd").unwrap_err();
+    assert!(e.to_string().contains("ffsd"), "{e}");
+    assert!(moved(&doc, "ffsd", &HandleId::Control(1), Vec3::ONE).is_err());
+    // The node itself can still be moved.
+    assert!(matches!(
+        moved(&doc, "ffsd", &HandleId::Origin, Vec3::ONE),
+        Ok(NodeEdit::Transform(_))
+    ));
+}
