@@ -94,6 +94,39 @@ impl ShapeSurfaceTool {
         }
     }
 
+    /// The rest and moved control nets `P_ij` (rest Greville grid plus `rest` offsets, and
+    /// that plus `moves`), dense with index `i + n_u j`; `None` when the counts or degrees
+    /// are invalid.
+    #[must_use]
+    pub fn control_nets(&self) -> Option<(Vec<Vec3>, Vec<Vec3>)> {
+        let kv = self.knots()?;
+        let (rest, moved, _) = self.nets(&kv);
+        Some((rest, moved))
+    }
+
+    /// Points `S(u, v) = Σᵢⱼ Nᵢ(u) Nⱼ(v) P_ij` of the surface with control net `net` (dense,
+    /// index `i + n_u j`, as from [`ShapeSurfaceTool::control_nets`]) at each parameter pair
+    /// of `params` (clamped to `[0, 1]²`). `None` when the counts or degrees are invalid or
+    /// `net` does not have `n_u · n_v` points.
+    #[must_use]
+    pub fn surface_points(&self, net: &[Vec3], params: &[(f32, f32)]) -> Option<Vec<Vec3>> {
+        let kv = self.knots()?;
+        let n_u = kv[0].count();
+        if net.len() != n_u * kv[1].count() {
+            return None;
+        }
+        let (pu, pv) = (kv[0].degree(), kv[1].degree());
+        Some(
+            params
+                .iter()
+                .map(|&(u, v)| {
+                    let b = bases(&kv, u.clamp(0.0, 1.0), v.clamp(0.0, 1.0));
+                    eval_net(net, n_u, pu, pv, &b)[0]
+                })
+                .collect(),
+        )
+    }
+
     fn knots(&self) -> Option<[KnotVector; 2]> {
         let (pu, pv) = (self.degree.0 as usize, self.degree.1 as usize);
         if pu > MAX_DEGREE || pv > MAX_DEGREE {
@@ -430,6 +463,31 @@ mod tests {
             u_edge: Vec3::new(2.0, 0.0, 0.0),
             v_edge: Vec3::new(0.0, 2.0, 0.0),
         }
+    }
+
+    #[test]
+    fn nets_and_surface_points() {
+        let mut t = ShapeSurfaceTool::planar(frame(), (4, 5));
+        t.moves.push(SurfaceEdit {
+            at: (3, 4),
+            offset: Vec3::new(0.0, 0.0, 0.5),
+        });
+        let (rest, moved) = t.control_nets().unwrap();
+        assert_eq!((rest.len(), moved.len()), (20, 20));
+        // Clamped ends: the corners of the surface are the corner control points.
+        let p = t.surface_points(&moved, &[(0.0, 0.0), (1.0, 1.0)]).unwrap();
+        assert_eq!(p[0], Vec3::new(-1.0, -1.0, 0.0));
+        assert!(
+            (p[1] - Vec3::new(1.0, 1.0, 0.5)).length() < 1e-6,
+            "{}",
+            p[1]
+        );
+        // Linear precision of the planar rest net: S(u, v) = O + u·U + v·V.
+        let q = t.surface_points(&rest, &[(0.3, 0.6)]).unwrap()[0];
+        assert!((q - Vec3::new(-0.4, 0.2, 0.0)).length() < 1e-6, "{q}");
+        assert!(t.surface_points(&rest[1..], &[(0.5, 0.5)]).is_none());
+        t.degree = (4, 3);
+        assert!(t.control_nets().is_none());
     }
 
     fn slab() -> Vec<Vec3> {

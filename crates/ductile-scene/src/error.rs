@@ -107,6 +107,14 @@ pub enum SceneError {
     /// A parameter is invalid according to `ductile-core`.
     #[error(transparent)]
     Core(#[from] CoreError),
+    /// A node has no handle with this id (see `handles::handles`).
+    #[error("node '{node}' has no handle {handle}")]
+    NoSuchHandle {
+        /// The node.
+        node: String,
+        /// The handle id as printed.
+        handle: String,
+    },
 }
 
 /// Shorthand for results in this crate.

@@ -10,7 +10,11 @@
 
 pub mod document;
 pub mod error;
+pub mod gizmo;
+pub mod handles;
 pub mod resolve;
+#[cfg(test)]
+mod test_tools;
 pub mod transform;
 pub mod validate;
 
@@ -21,5 +25,7 @@ pub mod prelude {
         VolumeNode,
     };
     pub use crate::error::{Result, SceneError};
+    pub use crate::gizmo::{Gizmo, Role, gizmo};
+    pub use crate::handles::{Handle, HandleId, HandleRole, NodeEdit, handles, moved};
     pub use crate::transform::Transform;
 }
