@@ -10,6 +10,7 @@
 
 pub mod document;
 pub mod error;
+pub mod evaluator;
 pub mod resolve;
 pub mod transform;
 pub mod validate;
@@ -21,5 +22,6 @@ pub mod prelude {
         VolumeNode,
     };
     pub use crate::error::{Result, SceneError};
+    pub use crate::evaluator::{MeshEvaluator, Update};
     pub use crate::transform::Transform;
 }
