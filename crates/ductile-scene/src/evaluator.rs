@@ -49,7 +49,7 @@ use crate::resolve::resolve_area;
 
 /// Above this fraction (`1 / OUTPUT_FULL_DIVISOR`) of changed welded vertices the output is
 /// rebuilt in full rather than patched (both give the same bits).
-const OUTPUT_FULL_DIVISOR: usize = 8;
+const OUTPUT_FULL_DIVISOR: usize = 3;
 
 /// What one [`MeshEvaluator::update`] did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
