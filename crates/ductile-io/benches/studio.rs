@@ -1,7 +1,8 @@
 //! Criterion benchmark: the Studio's frame work when one value of the document changes —
 //! [`MeshEvaluator::update`] after a macro slider moves or an FFSD point is dragged, on the
 //! identikit scenes (Lee Perry-Smith head, 8,844 welded vertices) and on the head subdivided
-//! twice ([`ductile_core::primitives::subdivided`]). Each iteration alternates between two
+//! twice ([`ductile_core::primitives::subdivided`]; `head-250k` in the names, but two levels
+//! give 141,474 welded vertices — see `docs/algorithms/evaluation.md`). Each iteration alternates between two
 //! values so that every iteration really evaluates again. `full/*` times a fresh
 //! `Document::evaluate` of the same scene for comparison.
 //! Targets (issue 4): ≤ 2 ms per slider change on the identikit scene, ≤ 16 ms on the

@@ -183,7 +183,9 @@ impl Dirty {
         }
         match domain {
             None => true,
-            Some(area) if self.list.len() < area.len() => self
+            // A binary search per member beats a scan of the area's flags only when the
+            // set is much smaller than the area.
+            Some(area) if self.list.len() * 16 < area.len() => self
                 .list
                 .iter()
                 .any(|&v| self.contains(v) && area.binary_search(&v).is_ok()),
