@@ -10,6 +10,7 @@
 
 pub mod document;
 pub mod error;
+pub mod evaluator;
 pub mod gizmo;
 pub mod handles;
 pub mod resolve;
@@ -25,6 +26,7 @@ pub mod prelude {
         VolumeNode,
     };
     pub use crate::error::{Result, SceneError};
+    pub use crate::evaluator::{MeshEvaluator, Update};
     pub use crate::gizmo::{Gizmo, Role, gizmo};
     pub use crate::handles::{Handle, HandleId, HandleRole, NodeEdit, handles, moved};
     pub use crate::transform::Transform;

@@ -75,9 +75,38 @@ impl Document {
     /// Resolves the stack of mesh `mesh` against its rest mesh. Each area is resolved once,
     /// however many layers use it.
     pub fn resolve_stack(&self, mesh: &str, rest: &RestMesh) -> Result<Stack> {
+        let mut cache: HashMap<String, Vec<u32>> = HashMap::new();
+        let layers = self.resolve_layers_with(mesh, |name, def| {
+            if let Some(v) = cache.get(name) {
+                return Ok(v.clone());
+            }
+            let v = resolve_area(def, rest, &format!("mesh '{mesh}', area '{name}'"))?;
+            cache.insert(name.to_owned(), v.clone());
+            Ok(v)
+        })?;
+        let layers = layers
+            .into_iter()
+            .map(|(mut layer, area)| {
+                if let Some(inf) = &mut layer.influence {
+                    inf.area = area;
+                }
+                layer
+            })
+            .collect();
+        Ok(Stack { layers })
+    }
+
+    /// Resolves every layer of mesh `mesh`'s stack in order, leaving each influence's area
+    /// to the caller: `area(name, definition)` gives the area's vertex set (of any type `A`),
+    /// returned next to the layer (whose `influence.area` is `None`). Errors are those of
+    /// [`Document::resolve_stack`], in the same order.
+    pub(crate) fn resolve_layers_with<A>(
+        &self,
+        mesh: &str,
+        mut area: impl FnMut(&str, &Area) -> Result<A>,
+    ) -> Result<Vec<(Layer, Option<A>)>> {
         let node = self.mesh(mesh)?;
         let mut layers = Vec::with_capacity(node.stack.len());
-        let mut areas: HashMap<&str, Vec<u32>> = HashMap::new();
         for (i, spec) in node.stack.iter().enumerate() {
             let tool_node = self.node(&spec.tool).map_err(|_| SceneError::UnknownTool {
                 mesh: mesh.to_owned(),
@@ -90,6 +119,7 @@ impl Document {
             let tool = self
                 .tool(&spec.tool)?
                 .transformed(&self.to_mesh_space(&spec.tool, mesh)?);
+            let mut vertices = None;
             let influence = match &spec.influence {
                 None => None,
                 Some(inf) => {
@@ -106,40 +136,35 @@ impl Document {
                         let placement = self.to_mesh_space(v, mesh)?;
                         volumes.push(Volume::new(vol.shape, placement, &format!("volume '{v}'"))?);
                     }
-                    let area = match &inf.area {
-                        None => None,
-                        Some(a) => {
-                            if !areas.contains_key(a.as_str()) {
-                                let def =
-                                    node.areas.get(a).ok_or_else(|| SceneError::UnknownArea {
-                                        mesh: mesh.to_owned(),
-                                        layer: i,
-                                        area: a.clone(),
-                                    })?;
-                                let what = format!("mesh '{mesh}', area '{a}'");
-                                areas.insert(a.as_str(), resolve_area(def, rest, &what)?);
-                            }
-                            areas.get(a.as_str()).cloned()
-                        }
-                    };
+                    if let Some(a) = &inf.area {
+                        let def = node.areas.get(a).ok_or_else(|| SceneError::UnknownArea {
+                            mesh: mesh.to_owned(),
+                            layer: i,
+                            area: a.clone(),
+                        })?;
+                        vertices = Some(area(a, def)?);
+                    }
                     Some(Influence {
                         volumes,
-                        area,
+                        area: None,
                         falloff: inf.falloff,
                         inner: inf.inner,
                         invert: inf.invert,
                     })
                 }
             };
-            layers.push(Layer {
-                name: spec.tool.clone(),
-                tool,
-                influence,
-                weight: spec.weight,
-                enabled: spec.enabled,
-            });
+            layers.push((
+                Layer {
+                    name: spec.tool.clone(),
+                    tool,
+                    influence,
+                    weight: spec.weight,
+                    enabled: spec.enabled,
+                },
+                vertices,
+            ));
         }
-        Ok(Stack { layers })
+        Ok(layers)
     }
 
     /// Resolves and evaluates the stack of mesh `mesh` on `rest`.

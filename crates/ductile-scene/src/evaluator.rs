@@ -1,0 +1,794 @@
+//! Incremental evaluation of one mesh's stack, for interactive editing (the Studio).
+//!
+//! [`MeshEvaluator`] keeps, between two calls of [`MeshEvaluator::update`]:
+//!
+//! * every area's welded vertex set, keyed by name and definition, so that an unchanged area
+//!   is never resolved again;
+//! * the resolved layers of the last evaluation, and for each layer that was not inert (see
+//!   [`Layer::is_inert`]) a *stage*: its [`LayerBinding`], and the welded positions of its
+//!   active vertices before (`saved`) and after (`written`) it was applied;
+//! * the welded output positions and the stored-order [`Deformed`] output.
+//!
+//! An update resolves the stack again (cheap: no vertex is visited), finds the first
+//! non-inert layer that differs from the cached one, rolls the positions back to that
+//! layer's input by writing back the `saved` values of every stage from the top down, and
+//! evaluates upwards from there. A later layer whose resolved value is unchanged and whose
+//! input is unchanged on every vertex it reads (see below) keeps its binding, and its
+//! `written` values are put back without deforming anything. To know which inputs changed,
+//! the update tracks a set `D` of welded vertices where the new positions may differ from the
+//! old ones at the same point of the stack (exact bitwise comparisons of `saved` and
+//! `written`; details in `docs/algorithms/evaluation.md`).
+//!
+//! A layer reads the positions of its *domain*: the vertices of its area when it has one
+//! and its tool reads only the active vertices (FFSD, lattice, curve, axial and shape
+//! surface tools), every vertex otherwise (no area, or DOGME / Direct FFD constraints
+//! anchored at vertices, sketch tools).
+//!
+//! Finally only the vertices whose output position changed (bitwise) are written to the
+//! stored-order output, and only the normals of the vertices of the triangles around them
+//! are recomputed — summing the same face normals in the same order as
+//! [`smooth_normals`](ductile_core::normals::smooth_normals), so the result is bit-identical
+//! to [`Document::evaluate`].
+//!
+//! A stack in which a layer refines the mesh (a sketch tool with adaptive refinement) is
+//! evaluated in full by [`Stack::evaluate`] whenever it changes.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use ductile_core::influence::Mask;
+use ductile_core::mesh::{Deformed, RestMesh, Topology};
+use ductile_core::stack::{Layer, LayerBinding, Stack};
+use ductile_core::tool::Tool;
+
+use crate::document::{Area, Document};
+use crate::error::Result;
+use crate::resolve::resolve_area;
+
+/// Above this fraction (`1 / OUTPUT_FULL_DIVISOR`) of changed welded vertices the output is
+/// rebuilt in full rather than patched (both give the same bits).
+const OUTPUT_FULL_DIVISOR: usize = 3;
+
+/// What one [`MeshEvaluator::update`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Update {
+    /// True when [`MeshEvaluator::deformed`] differs from what it was before the call (the
+    /// first evaluation always counts as a change).
+    pub changed: bool,
+    /// Stack index of the first layer that was evaluated again; the stack's length when no
+    /// layer was (nothing changed, or only layers at the top were removed or made inert).
+    pub first_layer: usize,
+    /// How many layers were bound and deformed again (the others kept their binding, or are
+    /// inert).
+    pub layers_evaluated: usize,
+}
+
+/// One layer as resolved from the document: the core layer without its area's vertex set
+/// (`layer.influence.area` is `None`) and that set, shared with the area cache.
+#[derive(Debug, Clone, PartialEq)]
+struct Resolved {
+    layer: Layer,
+    area: Option<Arc<Vec<u32>>>,
+}
+
+impl Resolved {
+    /// The complete core layer (with its area's vertices).
+    fn full(&self) -> Layer {
+        let mut layer = self.layer.clone();
+        if let (Some(inf), Some(area)) = (&mut layer.influence, &self.area) {
+            inf.area = Some(area.as_ref().clone());
+        }
+        layer
+    }
+
+    /// The welded vertices whose input positions the layer's mask, bind and deformation
+    /// read; `None` for every vertex.
+    fn domain(&self) -> Option<&[u32]> {
+        if reads_only_active(&self.layer.tool) {
+            self.area.as_deref().map(Vec::as_slice)
+        } else {
+            None
+        }
+    }
+}
+
+/// True for tools whose bind and deformation read the input positions of the layer's active
+/// vertices only (checked against each tool's `bind` and `deform`); DOGME and Direct FFD
+/// constraints may be anchored at any vertex and sketch tools flood-fill the whole surface.
+fn reads_only_active(tool: &Tool) -> bool {
+    matches!(
+        tool,
+        Tool::Ffsd(_) | Tool::Lattice(_) | Tool::Curve(_) | Tool::Axial(_) | Tool::ShapeSurface(_)
+    )
+}
+
+/// A non-inert layer of the last evaluation.
+#[derive(Debug)]
+struct Stage {
+    /// Index of the layer in the stack.
+    index: usize,
+    /// The layer as resolved.
+    resolved: Resolved,
+    /// Its mask and bind on its input.
+    binding: LayerBinding,
+    /// Input positions of `binding.mask.indices`.
+    saved: Vec<Vec3>,
+    /// Output positions of `binding.mask.indices`.
+    written: Vec<Vec3>,
+}
+
+impl Stage {
+    fn indices(&self) -> &[u32] {
+        &self.binding.mask.indices
+    }
+}
+
+/// What the cached stages and positions describe.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    /// Nothing usable (before the first evaluation, or after a failed one).
+    Empty,
+    /// `stages` and `positions` describe the last evaluation of `layers`.
+    Incremental,
+    /// The last evaluation refined the mesh; only `layers` and `output` are kept.
+    Refined,
+}
+
+/// The set `D` of welded vertices whose positions may differ between the new and the old
+/// evaluation at the current point of the stack.
+#[derive(Debug, Default)]
+struct Dirty {
+    flag: Vec<bool>,
+    list: Vec<u32>,
+    count: usize,
+}
+
+impl Dirty {
+    fn reset(&mut self, n: usize) {
+        self.flag.clear();
+        self.flag.resize(n, false);
+        self.list.clear();
+        self.count = 0;
+    }
+
+    fn contains(&self, v: u32) -> bool {
+        self.flag.get(v as usize).copied().unwrap_or(false)
+    }
+
+    fn insert(&mut self, v: u32) {
+        if let Some(f) = self.flag.get_mut(v as usize)
+            && !*f
+        {
+            *f = true;
+            self.list.push(v);
+            self.count += 1;
+        }
+    }
+
+    fn remove(&mut self, v: u32) {
+        if let Some(f) = self.flag.get_mut(v as usize)
+            && *f
+        {
+            *f = false;
+            self.count -= 1;
+        }
+    }
+
+    /// True when some vertex of `domain` (`None`: every vertex) is in the set.
+    fn intersects(&self, domain: Option<&[u32]>) -> bool {
+        if self.count == 0 {
+            return false;
+        }
+        match domain {
+            None => true,
+            // A binary search per member beats a scan of the area's flags only when the
+            // set is much smaller than the area.
+            Some(area) if self.list.len() * 16 < area.len() => self
+                .list
+                .iter()
+                .any(|&v| self.contains(v) && area.binary_search(&v).is_ok()),
+            Some(area) => area.iter().any(|&v| self.contains(v)),
+        }
+    }
+
+    /// The members, once each, and an empty set.
+    fn drain(&mut self) -> Vec<u32> {
+        let mut out = Vec::with_capacity(self.count);
+        for v in std::mem::take(&mut self.list) {
+            if let Some(f) = self.flag.get_mut(v as usize)
+                && *f
+            {
+                *f = false;
+                out.push(v);
+            }
+        }
+        self.count = 0;
+        out
+    }
+
+    /// The old evaluation went through `stage` while the new one did not (yet): a vertex
+    /// not in `D` had the stage's input position in both, so it now differs exactly when
+    /// the stage moved it.
+    fn advance_old(&mut self, stage: &Stage) {
+        self.advance(stage);
+    }
+
+    /// The new evaluation went through `stage` while the old one did not: same rule.
+    fn advance_new(&mut self, stage: &Stage) {
+        self.advance(stage);
+    }
+
+    fn advance(&mut self, stage: &Stage) {
+        for ((&v, &a), &b) in stage.indices().iter().zip(&stage.saved).zip(&stage.written) {
+            if !self.contains(v) && !same_bits(a, b) {
+                self.insert(v);
+            }
+        }
+    }
+
+    /// Both evaluations went through a stage (`old`, `new`) after [`Dirty::advance_old`]
+    /// and [`Dirty::advance_new`]: a vertex active in both now holds each stage's output, so
+    /// it differs exactly when those differ.
+    fn settle_common(&mut self, old: &Stage, new: &Stage) {
+        let (a, b) = (old.indices(), new.indices());
+        let (mut i, mut j) = (0, 0);
+        while i < a.len() && j < b.len() {
+            match a[i].cmp(&b[j]) {
+                std::cmp::Ordering::Less => i += 1,
+                std::cmp::Ordering::Greater => j += 1,
+                std::cmp::Ordering::Equal => {
+                    if same_bits(old.written[i], new.written[j]) {
+                        self.remove(a[i]);
+                    } else {
+                        self.insert(a[i]);
+                    }
+                    i += 1;
+                    j += 1;
+                }
+            }
+        }
+    }
+}
+
+/// Bitwise equality of two positions.
+fn same_bits(a: Vec3, b: Vec3) -> bool {
+    a.x.to_bits() == b.x.to_bits()
+        && a.y.to_bits() == b.y.to_bits()
+        && a.z.to_bits() == b.z.to_bits()
+}
+
+/// Welded vertex → incident triangles (ascending) and welded vertex → stored copies, as
+/// compressed rows.
+#[derive(Debug)]
+struct Links {
+    tri_offsets: Vec<u32>,
+    tris: Vec<u32>,
+    copy_offsets: Vec<u32>,
+    copies: Vec<u32>,
+    mark: Vec<bool>,
+}
+
+impl Links {
+    fn new(topology: &Topology) -> Self {
+        let n = topology.vertex_count();
+        let (tri_offsets, tris) = rows(
+            n,
+            topology
+                .triangles
+                .iter()
+                .enumerate()
+                .flat_map(|(t, tri)| tri.iter().map(move |&v| (v, t as u32))),
+        );
+        let (copy_offsets, copies) = rows(
+            n,
+            topology
+                .weld
+                .iter()
+                .enumerate()
+                .map(|(s, &w)| (w, s as u32)),
+        );
+        Self {
+            tri_offsets,
+            tris,
+            copy_offsets,
+            copies,
+            mark: vec![false; n],
+        }
+    }
+
+    fn triangles_of(&self, v: u32) -> &[u32] {
+        row(&self.tri_offsets, &self.tris, v)
+    }
+
+    fn copies_of(&self, v: u32) -> &[u32] {
+        row(&self.copy_offsets, &self.copies, v)
+    }
+}
+
+/// Row `v` of compressed rows.
+fn row<'a>(offsets: &[u32], values: &'a [u32], v: u32) -> &'a [u32] {
+    let v = v as usize;
+    &values[offsets[v] as usize..offsets[v + 1] as usize]
+}
+
+/// Compressed rows of `(row, value)` pairs, each row keeping the pairs' order.
+fn rows(n: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> (Vec<u32>, Vec<u32>) {
+    let mut offsets = vec![0_u32; n + 1];
+    for (r, _) in pairs.clone() {
+        offsets[r as usize + 1] += 1;
+    }
+    for i in 0..n {
+        offsets[i + 1] += offsets[i];
+    }
+    let mut next = offsets.clone();
+    let mut values = vec![0_u32; offsets[n] as usize];
+    for (r, v) in pairs {
+        let slot = &mut next[r as usize];
+        values[*slot as usize] = v;
+        *slot += 1;
+    }
+    (offsets, values)
+}
+
+/// The smooth normal of welded vertex `v`, exactly as
+/// [`smooth_normals`](ductile_core::normals::smooth_normals) computes it: the face normals
+/// `(b − a) × (c − a)` of its triangles summed in triangle order from zero, normalised
+/// (`Vec3::Z` when the sum is zero).
+fn vertex_normal(v: u32, links: &Links, triangles: &[[u32; 3]], positions: &[Vec3]) -> Vec3 {
+    let mut acc = Vec3::ZERO;
+    for &t in links.triangles_of(v) {
+        let [a, b, c] = triangles[t as usize];
+        let (pa, pb, pc) = (
+            positions[a as usize],
+            positions[b as usize],
+            positions[c as usize],
+        );
+        acc += (pb - pa).cross(pc - pa);
+    }
+    acc.try_normalize().unwrap_or(Vec3::Z)
+}
+
+/// Caches the evaluation of one mesh node's stack and brings it up to date with a
+/// [`Document`] incrementally (see the module documentation). Its results are bit-identical
+/// to [`Document::evaluate`].
+///
+/// The evaluator is `Send`: it may be moved into a background task and back.
+#[derive(Debug)]
+pub struct MeshEvaluator {
+    mesh: String,
+    rest: RestMesh,
+    /// Area name → (definition, welded vertices).
+    areas: HashMap<String, (Area, Arc<Vec<u32>>)>,
+    area_resolutions: usize,
+    /// Every layer of the stack at the last successful evaluation.
+    layers: Vec<Resolved>,
+    mode: Mode,
+    /// Non-inert layers of `layers`, bottom first (in [`Mode::Incremental`]).
+    stages: Vec<Stage>,
+    /// Welded output positions (in [`Mode::Incremental`]).
+    positions: Vec<Vec3>,
+    output: Option<Deformed>,
+    links: Option<Links>,
+    dirty: Dirty,
+}
+
+impl MeshEvaluator {
+    /// An evaluator for mesh node `mesh`, whose rest mesh is `rest` (a [`RestMesh`] is
+    /// already a shared, cheaply cloned handle). Nothing is evaluated before the first
+    /// [`MeshEvaluator::update`].
+    #[must_use]
+    pub fn new(mesh: &str, rest: RestMesh) -> Self {
+        Self {
+            mesh: mesh.to_owned(),
+            rest,
+            areas: HashMap::new(),
+            area_resolutions: 0,
+            layers: Vec::new(),
+            mode: Mode::Empty,
+            stages: Vec::new(),
+            positions: Vec::new(),
+            output: None,
+            links: None,
+            dirty: Dirty::default(),
+        }
+    }
+
+    /// The mesh node's name.
+    #[must_use]
+    pub fn mesh(&self) -> &str {
+        &self.mesh
+    }
+
+    /// The rest mesh.
+    #[must_use]
+    pub fn rest(&self) -> &RestMesh {
+        &self.rest
+    }
+
+    /// How many times an area was resolved against the rest mesh since the evaluator was
+    /// made (an area is resolved again only when its definition changes).
+    #[must_use]
+    pub fn area_resolutions(&self) -> usize {
+        self.area_resolutions
+    }
+
+    /// The deformed mesh of the last successful update, in stored vertex order with
+    /// recomputed normals (as [`Document::evaluate`] returns it); `None` before the first.
+    /// After a failed update it still holds the last good result.
+    #[must_use]
+    pub fn deformed(&self) -> Option<&Deformed> {
+        self.output.as_ref()
+    }
+
+    /// Brings the evaluation up to date with `doc`: resolves the mesh's stack (cached
+    /// areas), and evaluates again from the first non-inert layer that changed, keeping
+    /// the binding of every later layer whose input it reads is unchanged. Returns what it
+    /// did; `changed` is false, and nothing is evaluated, when nothing the mesh depends on
+    /// changed.
+    ///
+    /// # Errors
+    /// The errors of [`Document::evaluate`]: unknown names, invalid layers, failed binds.
+    /// After an error the previous result stays available and the next update evaluates
+    /// the whole stack again.
+    pub fn update(&mut self, doc: &Document) -> Result<Update> {
+        let layers = self.resolve(doc)?;
+        for (i, r) in layers.iter().enumerate() {
+            if self.layers.get(i) != Some(r) {
+                r.layer.validate()?;
+            }
+        }
+        let old_chain: Vec<usize> = non_inert(&self.layers);
+        let new_chain: Vec<usize> = non_inert(&layers);
+        let k = (0..)
+            .find(|&j| {
+                j >= old_chain.len()
+                    || j >= new_chain.len()
+                    || self.layers[old_chain[j]] != layers[new_chain[j]]
+            })
+            .unwrap_or(0);
+        let first_layer = new_chain.get(k).copied().unwrap_or(layers.len());
+        if self.mode != Mode::Empty && k == old_chain.len() && k == new_chain.len() {
+            for (stage, &index) in self.stages.iter_mut().zip(&new_chain) {
+                stage.index = index;
+            }
+            self.layers = layers;
+            return Ok(Update {
+                changed: false,
+                first_layer,
+                layers_evaluated: 0,
+            });
+        }
+        let result = match self.mode {
+            Mode::Incremental => self.evaluate_from(k, &layers, &new_chain),
+            Mode::Empty | Mode::Refined => self.evaluate_all(&layers, &new_chain),
+        };
+        match result {
+            Ok((layers_evaluated, changed)) => {
+                self.layers = layers;
+                Ok(Update {
+                    changed,
+                    first_layer: if self.mode == Mode::Refined {
+                        0
+                    } else {
+                        first_layer
+                    },
+                    layers_evaluated,
+                })
+            }
+            Err(e) => {
+                self.mode = Mode::Empty;
+                self.layers.clear();
+                self.stages.clear();
+                self.positions.clear();
+                Err(e)
+            }
+        }
+    }
+
+    /// The heat-map weight of stack layer `k` per stored vertex: the layer's mask weight
+    /// times its layer weight, 0 outside its mask. A disabled layer or one of weight 0 gives
+    /// zeros; a layer whose tool is the identity (a macro at 0) gives the mask it would have
+    /// on its input. `None` when `k` is out of range, before the first evaluation, after a
+    /// failed one, or when a layer refined the mesh (the layers below the refinement see
+    /// another vertex set than the output).
+    #[must_use]
+    pub fn layer_weights(&self, k: usize) -> Option<Vec<f32>> {
+        if self.mode != Mode::Incremental {
+            return None;
+        }
+        let r = self.layers.get(k)?;
+        let mut w = vec![0.0_f32; self.positions.len()];
+        let mask = match self.stages.iter().find(|s| s.index == k) {
+            Some(stage) => Some(stage.binding.mask.clone()),
+            None if r.layer.enabled && r.layer.weight != 0.0 => {
+                let input = self.input_of(k);
+                Some(match &r.full().influence {
+                    Some(inf) => inf.mask(&input),
+                    None => Mask::all(input.len()),
+                })
+            }
+            None => None,
+        };
+        if let Some(mask) = mask {
+            for (&i, &m) in mask.indices.iter().zip(&mask.weights) {
+                w[i as usize] = m * r.layer.weight;
+            }
+        }
+        Some(self.rest.topology().scatter(&w))
+    }
+
+    /// The displacement `|output − input|` of stack layer `k` per stored vertex (zeros for
+    /// an inert layer). `None` as for [`MeshEvaluator::layer_weights`].
+    #[must_use]
+    pub fn layer_displacement(&self, k: usize) -> Option<Vec<f32>> {
+        if self.mode != Mode::Incremental {
+            return None;
+        }
+        self.layers.get(k)?;
+        let mut d = vec![0.0_f32; self.positions.len()];
+        if let Some(stage) = self.stages.iter().find(|s| s.index == k) {
+            for ((&i, &a), &b) in stage.indices().iter().zip(&stage.saved).zip(&stage.written) {
+                d[i as usize] = (b - a).length();
+            }
+        }
+        Some(self.rest.topology().scatter(&d))
+    }
+
+    /// The welded input positions of stack layer `k`: the output with every stage above
+    /// `k` rolled back.
+    fn input_of(&self, k: usize) -> Vec<Vec3> {
+        let mut p = self.positions.clone();
+        for stage in self.stages.iter().rev().take_while(|s| s.index >= k) {
+            for (&i, &a) in stage.indices().iter().zip(&stage.saved) {
+                p[i as usize] = a;
+            }
+        }
+        p
+    }
+
+    /// Resolves the stack through the area cache.
+    fn resolve(&mut self, doc: &Document) -> Result<Vec<Resolved>> {
+        let Self {
+            mesh,
+            rest,
+            areas,
+            area_resolutions,
+            ..
+        } = self;
+        let node = doc.mesh(mesh)?;
+        areas.retain(|name, _| node.areas.contains_key(name));
+        // Areas checked against the cache during this call.
+        let mut checked: HashMap<String, Arc<Vec<u32>>> = HashMap::new();
+        let layers = doc.resolve_layers_with(mesh, |name, def| {
+            if let Some(v) = checked.get(name) {
+                return Ok(Arc::clone(v));
+            }
+            let v = match areas.get(name) {
+                Some((cached, v)) if cached == def => Arc::clone(v),
+                _ => {
+                    let v = Arc::new(resolve_area(
+                        def,
+                        rest,
+                        &format!("mesh '{mesh}', area '{name}'"),
+                    )?);
+                    *area_resolutions += 1;
+                    areas.insert(name.to_owned(), (def.clone(), Arc::clone(&v)));
+                    v
+                }
+            };
+            checked.insert(name.to_owned(), Arc::clone(&v));
+            Ok(v)
+        })?;
+        Ok(layers
+            .into_iter()
+            .map(|(layer, area)| Resolved { layer, area })
+            .collect())
+    }
+
+    /// Evaluates every layer from the rest positions. Returns (layers evaluated, changed).
+    fn evaluate_all(&mut self, layers: &[Resolved], chain: &[usize]) -> Result<(usize, bool)> {
+        self.stages.clear();
+        self.positions = self.rest.welded_positions().to_vec();
+        self.mode = Mode::Empty;
+        self.dirty.reset(self.positions.len());
+        match self.run_from(0, layers, chain)? {
+            Some(n) => {
+                self.mode = Mode::Incremental;
+                self.dirty.drain();
+                let new = self.rest.output(&self.positions);
+                let changed = self.output.as_ref() != Some(&new);
+                self.output = Some(new);
+                Ok((n, changed))
+            }
+            None => self.evaluate_refined(layers, chain),
+        }
+    }
+
+    /// Evaluates a stack with a refining layer with [`Stack::evaluate`].
+    fn evaluate_refined(&mut self, layers: &[Resolved], chain: &[usize]) -> Result<(usize, bool)> {
+        self.stages.clear();
+        self.positions.clear();
+        self.dirty.reset(0);
+        self.mode = Mode::Empty;
+        let stack = Stack {
+            layers: layers.iter().map(Resolved::full).collect(),
+        };
+        let new = stack.evaluate(&self.rest)?;
+        self.mode = if new.refined.is_some() {
+            Mode::Refined
+        } else {
+            Mode::Empty
+        };
+        let changed = self.output.as_ref() != Some(&new);
+        self.output = Some(new);
+        Ok((chain.len(), changed))
+    }
+
+    /// Evaluates again from chain position `k` on the cached state. Returns (layers
+    /// evaluated, changed).
+    fn evaluate_from(
+        &mut self,
+        k: usize,
+        layers: &[Resolved],
+        chain: &[usize],
+    ) -> Result<(usize, bool)> {
+        let n = self.positions.len();
+        if self.dirty.flag.len() != n {
+            self.dirty.reset(n);
+        }
+        let Some(evaluated) = self.run_from(k, layers, chain)? else {
+            return self.evaluate_refined(layers, chain);
+        };
+        let candidates = self.dirty.drain();
+        let changed = self.patch_output(&candidates);
+        Ok((evaluated, changed))
+    }
+
+    /// Rolls the positions back to the input of chain position `k` and evaluates the chain
+    /// from there, reusing stages whose layer and read input are unchanged. Returns the
+    /// number of layers evaluated, or `None` when a layer refined the mesh (the state is
+    /// then unusable).
+    fn run_from(
+        &mut self,
+        k: usize,
+        layers: &[Resolved],
+        chain: &[usize],
+    ) -> Result<Option<usize>> {
+        let rest = self.rest.clone();
+        let k = k.min(self.stages.len());
+        for stage in self.stages[k..].iter().rev() {
+            for (&i, &a) in stage.indices().iter().zip(&stage.saved) {
+                self.positions[i as usize] = a;
+            }
+        }
+        let mut old: Vec<Option<Stage>> = self.stages.drain(k..).map(Some).collect();
+        let mut next_old = 0;
+        let mut evaluated = 0;
+        for &li in chain.iter().skip(k) {
+            let r = &layers[li];
+            let mut matched = None;
+            if let Some(q) =
+                (next_old..old.len()).find(|&q| old[q].as_ref().is_some_and(|s| s.resolved == *r))
+            {
+                for s in old[next_old..q].iter().flatten() {
+                    self.dirty.advance_old(s);
+                }
+                next_old = q + 1;
+                matched = old[q].take();
+            }
+            if let Some(mut stage) =
+                matched.take_if(|s| !self.dirty.intersects(s.resolved.domain()))
+            {
+                for (&i, &b) in stage.indices().iter().zip(&stage.written) {
+                    self.positions[i as usize] = b;
+                }
+                stage.index = li;
+                self.stages.push(stage);
+                continue;
+            }
+            let binding = LayerBinding::bind(&r.full(), &self.positions, rest.topology())?;
+            let saved = gather(&self.positions, &binding.mask.indices);
+            if binding
+                .apply_refining(&r.layer, &mut self.positions)?
+                .is_some()
+            {
+                return Ok(None);
+            }
+            let written = gather(&self.positions, &binding.mask.indices);
+            let stage = Stage {
+                index: li,
+                resolved: r.clone(),
+                binding,
+                saved,
+                written,
+            };
+            evaluated += 1;
+            if let Some(o) = &matched {
+                self.dirty.advance_old(o);
+            }
+            self.dirty.advance_new(&stage);
+            if let Some(o) = &matched {
+                self.dirty.settle_common(o, &stage);
+            }
+            self.stages.push(stage);
+        }
+        for s in old[next_old..].iter().flatten() {
+            self.dirty.advance_old(s);
+        }
+        Ok(Some(evaluated))
+    }
+
+    /// Writes the welded positions of the vertices among `candidates` that moved into the
+    /// output and recomputes the normals around them. Returns whether anything changed.
+    fn patch_output(&mut self, candidates: &[u32]) -> bool {
+        let rest = self.rest.clone();
+        let topology = rest.topology();
+        let Some(out) = self
+            .output
+            .as_mut()
+            .filter(|o| o.refined.is_none() && o.positions.len() == topology.stored_count())
+        else {
+            self.output = Some(rest.output(&self.positions));
+            return true;
+        };
+        let moved: Vec<u32> = candidates
+            .iter()
+            .copied()
+            .filter(|&v| {
+                let s = topology.representative[v as usize] as usize;
+                !same_bits(self.positions[v as usize], out.positions[s])
+            })
+            .collect();
+        if moved.is_empty() {
+            return false;
+        }
+        if moved.len() * OUTPUT_FULL_DIVISOR > self.positions.len() {
+            *out = rest.output(&self.positions);
+            return true;
+        }
+        let links = self.links.get_or_insert_with(|| Links::new(topology));
+        let triangles = &topology.triangles;
+        let mut around = Vec::new();
+        for &v in &moved {
+            for &s in links.copies_of(v) {
+                out.positions[s as usize] = self.positions[v as usize];
+            }
+            for &t in row(&links.tri_offsets, &links.tris, v) {
+                for c in triangles[t as usize] {
+                    if !links.mark[c as usize] {
+                        links.mark[c as usize] = true;
+                        around.push(c);
+                    }
+                }
+            }
+        }
+        for &v in &around {
+            links.mark[v as usize] = false;
+            let normal = vertex_normal(v, links, triangles, &self.positions);
+            for &s in links.copies_of(v) {
+                out.normals[s as usize] = normal;
+            }
+        }
+        true
+    }
+}
+
+/// Indices of the non-inert layers.
+fn non_inert(layers: &[Resolved]) -> Vec<usize> {
+    layers
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| !r.layer.is_inert())
+        .map(|(i, _)| i)
+        .collect()
+}
+
+/// `positions[i]` for every `i` of `indices`.
+fn gather(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
+    indices.iter().map(|&i| positions[i as usize]).collect()
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,567 @@
+//! The evaluator against [`Document::evaluate`]: random sequences of edits, after each of
+//! which the incremental result must equal a fresh evaluation bit for bit.
+
+use std::collections::BTreeMap;
+
+use ductile_core::ffsd::{ControlPoint, FfsdMacro, FfsdTool, PointMode};
+use ductile_core::influence::{Falloff, Shape};
+use ductile_core::mesh::{Deformed, Mesh, RestMesh};
+use ductile_core::primitives::grid;
+use ductile_core::stack::{LayerBinding, Stack};
+use glam::{Quat, Vec3};
+use proptest::prelude::*;
+
+use super::*;
+use crate::document::{
+    InfluenceSpec, LayerSpec, MacroUse, MeshNode, Node, NodeKind, RegionShape, VolumeNode,
+};
+use crate::transform::Transform;
+
+const ROWS: usize = 16;
+const COLUMNS: usize = 24;
+
+/// A tube of `ROWS × COLUMNS` welded vertices, stored with a seam: column `COLUMNS` is a
+/// bit-equal copy of column 0.
+fn tube() -> Mesh {
+    grid(ROWS, COLUMNS + 1, false, |r, c| {
+        let a = std::f32::consts::TAU * (c % COLUMNS) as f32 / COLUMNS as f32;
+        Vec3::new(a.cos(), r as f32 * 0.2, a.sin())
+    })
+}
+
+fn rest() -> RestMesh {
+    RestMesh::new(tube(), "tube").unwrap()
+}
+
+fn node(name: &str, parent: Option<&str>, kind: NodeKind) -> Node {
+    Node {
+        name: name.to_owned(),
+        parent: parent.map(str::to_owned),
+        transform: Transform::IDENTITY,
+        kind,
+    }
+}
+
+fn with_area(tool: &str, area: &str) -> LayerSpec {
+    LayerSpec {
+        influence: Some(InfluenceSpec {
+            area: Some(area.to_owned()),
+            ..InfluenceSpec::default()
+        }),
+        ..LayerSpec::new(tool)
+    }
+}
+
+fn ffsd(points: Vec<ControlPoint>) -> NodeKind {
+    NodeKind::Tool(Tool::Ffsd(FfsdTool::new(points)))
+}
+
+/// Names of the tool nodes layers may use.
+const TOOLS: [&str; 5] = ["mac", "mac2", "free", "dir", "wide"];
+
+/// The test scene: mesh `m` with five layers (a macro in a region area, a free tool on the
+/// whole mesh, a directional point in a vertex area and a volume, a wide point limited by
+/// the volume only, a second macro in a box area), mesh `other`, an unrelated group.
+fn scene() -> Document {
+    let areas = BTreeMap::from([
+        (
+            "top".to_owned(),
+            Area::Region(vec![RegionShape {
+                shape: Shape::Sphere { radius: 0.6 },
+                transform: Transform::from_translation(Vec3::new(0.0, 2.6, 1.0)),
+            }]),
+        ),
+        (
+            "front".to_owned(),
+            Area::Vertices((0..(ROWS * (COLUMNS + 1)) as u32).step_by(3).collect()),
+        ),
+        (
+            "band".to_owned(),
+            Area::Region(vec![RegionShape {
+                shape: Shape::Box {
+                    half_extents: Vec3::new(2.0, 0.3, 2.0),
+                },
+                transform: Transform::from_translation(Vec3::new(0.0, 1.0, 0.0)),
+            }]),
+        ),
+    ]);
+    let stack = vec![
+        with_area("mac", "top"),
+        LayerSpec::new("free"),
+        LayerSpec {
+            influence: Some(InfluenceSpec {
+                volumes: vec!["vol".to_owned()],
+                area: Some("front".to_owned()),
+                falloff: Falloff::Smooth,
+                inner: 0.2,
+                invert: false,
+            }),
+            ..LayerSpec::new("dir")
+        },
+        LayerSpec {
+            influence: Some(InfluenceSpec {
+                volumes: vec!["vol".to_owned()],
+                ..InfluenceSpec::default()
+            }),
+            weight: 0.7,
+            ..LayerSpec::new("wide")
+        },
+        with_area("mac2", "band"),
+    ];
+    let macros = BTreeMap::from([(
+        "bump".to_owned(),
+        FfsdMacro {
+            label: "Bump".to_owned(),
+            group: "Test".to_owned(),
+            area: Some("top".to_owned()),
+            points: vec![ControlPoint::basic(Vec3::new(0.0, 2.6, 1.3), 0.4, 2.0, 0.3)],
+            height: None,
+            range: (-1.0, 1.0),
+        },
+    )]);
+    Document {
+        nodes: vec![
+            node(
+                "m",
+                None,
+                NodeKind::Mesh(MeshNode {
+                    source: "tube.obj".to_owned(),
+                    stack,
+                    areas,
+                }),
+            ),
+            node("g", Some("m"), NodeKind::Group),
+            node(
+                "vol",
+                Some("g"),
+                NodeKind::Volume(VolumeNode {
+                    shape: Shape::Sphere { radius: 0.9 },
+                }),
+            ),
+            node(
+                "mac",
+                Some("m"),
+                NodeKind::Macro(MacroUse {
+                    name: "bump".to_owned(),
+                    value: 0.5,
+                }),
+            ),
+            node(
+                "mac2",
+                Some("m"),
+                NodeKind::Macro(MacroUse {
+                    name: "bump".to_owned(),
+                    value: 0.0,
+                }),
+            ),
+            node(
+                "free",
+                Some("g"),
+                ffsd(vec![ControlPoint::basic(
+                    Vec3::new(1.2, 0.5, 0.0),
+                    0.2,
+                    2.0,
+                    0.5,
+                )]),
+            ),
+            node(
+                "dir",
+                Some("m"),
+                ffsd(vec![ControlPoint {
+                    position: Vec3::new(0.0, 1.5, 1.4),
+                    mode: PointMode::Directional {
+                        reference: Vec3::new(0.0, 1.5, 0.9),
+                    },
+                    gamma: 0.3,
+                    alpha: 2.0,
+                    epsilon: 0.5,
+                }]),
+            ),
+            node(
+                "wide",
+                Some("m"),
+                ffsd(vec![ControlPoint::basic(
+                    Vec3::new(0.0, 0.8, -1.4),
+                    -0.3,
+                    1.5,
+                    0.6,
+                )]),
+            ),
+            node(
+                "other",
+                None,
+                NodeKind::Mesh(MeshNode {
+                    source: "tube.obj".to_owned(),
+                    stack: vec![LayerSpec::new("free2")],
+                    areas: BTreeMap::new(),
+                }),
+            ),
+            node(
+                "free2",
+                Some("other"),
+                ffsd(vec![ControlPoint::basic(Vec3::ZERO, 0.1, 2.0, 0.5)]),
+            ),
+            node("unrelated", None, NodeKind::Group),
+        ],
+        macros,
+    }
+}
+
+/// One edit of the scene.
+#[derive(Debug, Clone)]
+enum Edit {
+    MacroValue(bool, f32),
+    MovePoint(usize, Vec3),
+    Weight(usize, f32),
+    Toggle(usize),
+    MoveVolume(Vec3),
+    RotateGroup(f32),
+    AreaRadius(f32),
+    AreaVertices(u32),
+    AddLayer(usize, usize, bool),
+    RemoveLayer(usize),
+    MoveLayer(usize, usize),
+    OtherMesh(f32),
+    Unrelated(f32),
+}
+
+impl Edit {
+    /// True for edits that cannot change mesh `m`.
+    fn is_unrelated(&self) -> bool {
+        matches!(self, Edit::OtherMesh(_) | Edit::Unrelated(_))
+    }
+
+    fn apply(&self, doc: &mut Document) {
+        let stack_len = doc.mesh("m").unwrap().stack.len();
+        match *self {
+            Edit::MacroValue(second, v) => {
+                let name = if second { "mac2" } else { "mac" };
+                if let NodeKind::Macro(m) = &mut doc.node_mut(name).unwrap().kind {
+                    m.value = v;
+                }
+            }
+            Edit::MovePoint(t, d) => {
+                let name = ["free", "dir", "wide"][t % 3];
+                if let NodeKind::Tool(Tool::Ffsd(f)) = &mut doc.node_mut(name).unwrap().kind {
+                    f.points[0].position += d;
+                }
+            }
+            Edit::Weight(l, w) if stack_len > 0 => {
+                doc.mesh_mut("m").unwrap().stack[l % stack_len].weight = w;
+            }
+            Edit::Toggle(l) if stack_len > 0 => {
+                let layer = &mut doc.mesh_mut("m").unwrap().stack[l % stack_len];
+                layer.enabled = !layer.enabled;
+            }
+            Edit::MoveVolume(d) => doc.node_mut("vol").unwrap().transform.translation += d,
+            Edit::RotateGroup(a) => {
+                doc.node_mut("g").unwrap().transform.rotation = Quat::from_rotation_y(a);
+            }
+            Edit::AreaRadius(r) => {
+                if let Some(Area::Region(shapes)) = doc.mesh_mut("m").unwrap().areas.get_mut("top")
+                {
+                    shapes[0].shape = Shape::Sphere { radius: r };
+                }
+            }
+            Edit::AreaVertices(start) => {
+                let count = (ROWS * (COLUMNS + 1)) as u32;
+                doc.mesh_mut("m").unwrap().areas.insert(
+                    "front".to_owned(),
+                    Area::Vertices((start % 5..count).step_by(3).collect()),
+                );
+            }
+            Edit::AddLayer(t, at, area) => {
+                let tool = TOOLS[t % TOOLS.len()];
+                let spec = if area {
+                    with_area(tool, ["top", "front", "band"][t % 3])
+                } else {
+                    LayerSpec::new(tool)
+                };
+                doc.mesh_mut("m")
+                    .unwrap()
+                    .stack
+                    .insert(at % (stack_len + 1), spec);
+            }
+            Edit::RemoveLayer(l) if stack_len > 0 => {
+                doc.mesh_mut("m").unwrap().stack.remove(l % stack_len);
+            }
+            Edit::MoveLayer(from, to) if stack_len > 0 => {
+                let stack = &mut doc.mesh_mut("m").unwrap().stack;
+                let layer = stack.remove(from % stack_len);
+                stack.insert(to % stack_len, layer);
+            }
+            Edit::OtherMesh(v) => {
+                if let NodeKind::Tool(Tool::Ffsd(f)) = &mut doc.node_mut("free2").unwrap().kind {
+                    f.points[0].gamma = v;
+                }
+            }
+            Edit::Unrelated(x) => doc.node_mut("unrelated").unwrap().transform.translation.x = x,
+            _ => {}
+        }
+    }
+}
+
+fn vec3() -> impl Strategy<Value = Vec3> {
+    (-0.3_f32..0.3, -0.3_f32..0.3, -0.3_f32..0.3).prop_map(|(x, y, z)| Vec3::new(x, y, z))
+}
+
+fn edit() -> impl Strategy<Value = Edit> {
+    prop_oneof![
+        3 => (any::<bool>(), prop_oneof![Just(0.0_f32), -1.0_f32..1.0])
+            .prop_map(|(s, v)| Edit::MacroValue(s, v)),
+        2 => (0..3_usize, vec3()).prop_map(|(t, d)| Edit::MovePoint(t, d)),
+        1 => (0..8_usize, prop_oneof![Just(0.0_f32), Just(1.0_f32), 0.0_f32..1.0])
+            .prop_map(|(l, w)| Edit::Weight(l, w)),
+        1 => (0..8_usize).prop_map(Edit::Toggle),
+        1 => vec3().prop_map(Edit::MoveVolume),
+        1 => (-1.0_f32..1.0).prop_map(Edit::RotateGroup),
+        1 => (0.2_f32..1.2).prop_map(Edit::AreaRadius),
+        1 => (0..5_u32).prop_map(Edit::AreaVertices),
+        1 => (0..5_usize, 0..8_usize, any::<bool>()).prop_map(|(t, a, b)| Edit::AddLayer(t, a, b)),
+        1 => (0..8_usize).prop_map(Edit::RemoveLayer),
+        1 => (0..8_usize, 0..8_usize).prop_map(|(a, b)| Edit::MoveLayer(a, b)),
+        1 => (-1.0_f32..1.0).prop_map(Edit::OtherMesh),
+        1 => (-1.0_f32..1.0).prop_map(Edit::Unrelated),
+    ]
+}
+
+fn bits(d: &Deformed) -> (Vec<[u32; 3]>, Vec<[u32; 3]>) {
+    let b = |v: &Vec<Vec3>| v.iter().map(|p| p.to_array().map(f32::to_bits)).collect();
+    (b(&d.positions), b(&d.normals))
+}
+
+/// The evaluator's output equals a fresh evaluation of `doc` bit for bit (or both fail).
+fn check_against_fresh(
+    ev: &MeshEvaluator,
+    update: &Result<Update>,
+    doc: &Document,
+    rest: &RestMesh,
+) {
+    match doc.evaluate("m", rest) {
+        Ok(expected) => {
+            assert!(
+                update.is_ok(),
+                "fresh evaluation succeeded, update failed: {update:?}"
+            );
+            let got = ev.deformed().expect("an output after a successful update");
+            assert!(
+                bits(got) == bits(&expected),
+                "output differs from Document::evaluate"
+            );
+            assert_eq!(got.refined, expected.refined);
+        }
+        Err(e) => assert!(
+            update.is_err(),
+            "fresh evaluation failed ({e}), update did not"
+        ),
+    }
+}
+
+/// Layer `k`'s heat maps against an oracle: its input is the stack below it evaluated
+/// from scratch, its output the stack up to it.
+fn check_heat_maps(ev: &MeshEvaluator, doc: &Document, rest: &RestMesh, k: usize) {
+    let stack = doc.resolve_stack("m", rest).unwrap();
+    let below = Stack {
+        layers: stack.layers[..k].to_vec(),
+    };
+    let upto = Stack {
+        layers: stack.layers[..=k].to_vec(),
+    };
+    let input = below.evaluate_welded(rest).unwrap();
+    let output = upto.evaluate_welded(rest).unwrap();
+    let layer = &stack.layers[k];
+    let topo = rest.topology();
+    let displacement: Vec<f32> = input
+        .iter()
+        .zip(&output)
+        .map(|(a, b)| (*b - *a).length())
+        .collect();
+    assert_eq!(
+        ev.layer_displacement(k).unwrap(),
+        topo.scatter(&displacement)
+    );
+    let mut weights = vec![0.0_f32; input.len()];
+    if layer.enabled && layer.weight != 0.0 {
+        let mask = LayerBinding::bind(layer, &input, topo).unwrap().mask;
+        for (&i, &w) in mask.indices.iter().zip(&mask.weights) {
+            weights[i as usize] = w * layer.weight;
+        }
+    }
+    assert_eq!(ev.layer_weights(k).unwrap(), topo.scatter(&weights));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_edits_match_a_fresh_evaluation(edits in prop::collection::vec(edit(), 1..12)) {
+        let rest = rest();
+        let mut doc = scene();
+        let mut ev = MeshEvaluator::new("m", rest.clone());
+        let first = ev.update(&doc);
+        check_against_fresh(&ev, &first, &doc, &rest);
+        for e in &edits {
+            e.apply(&mut doc);
+            let update = ev.update(&doc);
+            check_against_fresh(&ev, &update, &doc, &rest);
+            if e.is_unrelated() {
+                let u = *update.as_ref().unwrap();
+                prop_assert!(!u.changed && u.layers_evaluated == 0, "{e:?} gave {u:?}");
+            }
+            if let Ok(u) = &update {
+                let len = doc.mesh("m").unwrap().stack.len();
+                if len > 0 {
+                    check_heat_maps(&ev, &doc, &rest, u.first_layer.min(len - 1));
+                }
+            }
+        }
+        // Nothing changed: no work.
+        let again = ev.update(&doc);
+        if let Ok(u) = again {
+            prop_assert_eq!(u, Update { changed: false, first_layer: u.first_layer, layers_evaluated: 0 });
+        }
+    }
+}
+
+#[test]
+fn a_slider_change_reevaluates_only_its_layer_and_those_it_touches() {
+    let rest = rest();
+    let mut doc = scene();
+    let mut ev = MeshEvaluator::new("m", rest.clone());
+    let u = ev.update(&doc).unwrap();
+    // Layers 0..4 are live; `mac2` (value 0) is inert.
+    assert_eq!(
+        u,
+        Update {
+            changed: true,
+            first_layer: 0,
+            layers_evaluated: 4
+        }
+    );
+    // The top macro: `free` (whole mesh) must follow, `dir` (front ∩ vol) and `wide` (vol)
+    // read every vertex or not depending on their domain; the output must match.
+    for (value, expect_change) in [(0.7, true), (0.7, false), (0.0, true)] {
+        if let NodeKind::Macro(m) = &mut doc.node_mut("mac").unwrap().kind {
+            m.value = value;
+        }
+        let u = ev.update(&doc).unwrap();
+        assert_eq!(u.changed, expect_change, "value {value}: {u:?}");
+        check_against_fresh(&ev, &Ok(u), &doc, &rest);
+    }
+    // The second macro, alone in its band area at the top of the stack: one layer.
+    if let NodeKind::Macro(m) = &mut doc.node_mut("mac2").unwrap().kind {
+        m.value = 0.8;
+    }
+    let u = ev.update(&doc).unwrap();
+    assert_eq!(
+        u,
+        Update {
+            changed: true,
+            first_layer: 4,
+            layers_evaluated: 1
+        }
+    );
+    check_against_fresh(&ev, &Ok(u), &doc, &rest);
+    // Moving the volume re-evaluates `dir` and `wide` but not the layers below.
+    doc.node_mut("vol").unwrap().transform.translation.x += 0.1;
+    let u = ev.update(&doc).unwrap();
+    assert_eq!(u.first_layer, 2);
+    assert!(u.layers_evaluated >= 2, "{u:?}");
+    check_against_fresh(&ev, &Ok(u), &doc, &rest);
+}
+
+#[test]
+fn a_change_to_a_disjoint_area_keeps_the_bindings_above() {
+    // Two macros in disjoint areas: changing the lower one must not rebind the upper one.
+    let rest = rest();
+    let mut doc = scene();
+    let stack = &mut doc.mesh_mut("m").unwrap().stack;
+    *stack = vec![with_area("mac2", "band"), with_area("mac", "top")];
+    if let NodeKind::Macro(m) = &mut doc.node_mut("mac2").unwrap().kind {
+        m.value = 0.5;
+    }
+    let mut ev = MeshEvaluator::new("m", rest.clone());
+    ev.update(&doc).unwrap();
+    if let NodeKind::Macro(m) = &mut doc.node_mut("mac2").unwrap().kind {
+        m.value = -0.5;
+    }
+    let u = ev.update(&doc).unwrap();
+    check_against_fresh(&ev, &Ok(u), &doc, &rest);
+    // The band (y in [0.7, 1.3]) and the top sphere (y around 2.6) share no vertex.
+    assert_eq!(
+        u,
+        Update {
+            changed: true,
+            first_layer: 0,
+            layers_evaluated: 1
+        }
+    );
+}
+
+#[test]
+fn areas_are_resolved_once_until_their_definition_changes() {
+    let rest = rest();
+    let mut doc = scene();
+    let mut ev = MeshEvaluator::new("m", rest.clone());
+    ev.update(&doc).unwrap();
+    // top, front, band.
+    assert_eq!(ev.area_resolutions(), 3);
+    for v in [0.1, 0.2, 0.3] {
+        if let NodeKind::Macro(m) = &mut doc.node_mut("mac").unwrap().kind {
+            m.value = v;
+        }
+        ev.update(&doc).unwrap();
+    }
+    assert_eq!(ev.area_resolutions(), 3);
+    Edit::AreaRadius(0.8).apply(&mut doc);
+    let u = ev.update(&doc).unwrap();
+    check_against_fresh(&ev, &Ok(u), &doc, &rest);
+    assert_eq!(ev.area_resolutions(), 4);
+    ev.update(&doc).unwrap();
+    assert_eq!(ev.area_resolutions(), 4);
+}
+
+#[test]
+fn errors_keep_the_last_result_and_recover() {
+    let rest = rest();
+    let mut doc = scene();
+    let mut ev = MeshEvaluator::new("m", rest.clone());
+    ev.update(&doc).unwrap();
+    let good = ev.deformed().unwrap().clone();
+    doc.mesh_mut("m").unwrap().stack[1].weight = f32::NAN;
+    assert!(ev.update(&doc).is_err());
+    assert_eq!(ev.deformed(), Some(&good));
+    doc.mesh_mut("m").unwrap().stack[1].weight = 0.5;
+    let u = ev.update(&doc).unwrap();
+    assert!(u.changed);
+    check_against_fresh(&ev, &Ok(u), &doc, &rest);
+    // An unknown mesh is an error, not a panic.
+    let mut missing = MeshEvaluator::new("nope", rest);
+    assert!(missing.update(&doc).is_err());
+    assert!(missing.deformed().is_none());
+    assert!(missing.layer_weights(0).is_none());
+}
+
+#[test]
+fn heat_maps_of_inert_layers_and_out_of_range() {
+    let rest = rest();
+    let doc = scene();
+    let mut ev = MeshEvaluator::new("m", rest.clone());
+    assert!(ev.layer_weights(0).is_none());
+    ev.update(&doc).unwrap();
+    // `mac2` at 0 (layer 4) is inert: no displacement, but its mask is shown.
+    check_heat_maps(&ev, &doc, &rest, 4);
+    assert!(ev.layer_weights(4).unwrap().iter().any(|&w| w > 0.0));
+    assert!(ev.layer_displacement(4).unwrap().iter().all(|&d| d == 0.0));
+    for k in 0..4 {
+        check_heat_maps(&ev, &doc, &rest, k);
+    }
+    assert!(ev.layer_weights(5).is_none());
+    assert!(ev.layer_displacement(5).is_none());
+}
+
+#[test]
+fn evaluator_is_send() {
+    fn send<T: Send>() {}
+    send::<MeshEvaluator>();
+}
