@@ -229,6 +229,12 @@ pub enum IoError {
         /// The history's error (it names the step).
         source: ductile_history::error::HistoryError,
     },
+    /// A project that has no scene file yet was asked to save in place (use "save as").
+    #[error("{}: the project has no file yet: choose where to save it (save as)", name.display())]
+    NoProjectFile {
+        /// The name the project is known by.
+        name: PathBuf,
+    },
 }
 
 /// The scene format versions this build reads.

@@ -228,7 +228,7 @@ pub fn history_to_string(
     let base = match base {
         SaveBase::Inline => Base::Inline(history.base().clone()),
         SaveBase::Reference(scene) => Base::Reference {
-            path: relative_to(scene, scene_dir(history_path)),
+            path: crate::project::relative_path(scene, scene_dir(history_path)),
             hash: document_hash(history.base())?,
         },
     };
@@ -249,24 +249,4 @@ pub fn save_history(path: impl AsRef<Path>, history: &History, base: SaveBase<'_
         source: std::io::Error::other(e),
     })?;
     write_atomic(path, text.as_bytes())
-}
-
-/// `target` relative to `dir` (with `..` where needed, `/` separators), both made
-/// absolute against the current directory first.
-fn relative_to(target: &Path, dir: &Path) -> String {
-    let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_owned());
-    let (target, dir) = (abs(target), abs(dir));
-    let t: Vec<_> = target.components().collect();
-    let d: Vec<_> = dir.components().collect();
-    let common = t.iter().zip(&d).take_while(|(a, b)| a == b).count();
-    if common == 0 {
-        return target.to_string_lossy().replace('\\', "/");
-    }
-    let mut parts: Vec<String> = vec!["..".to_owned(); d.len() - common];
-    parts.extend(
-        t[common..]
-            .iter()
-            .map(|c| c.as_os_str().to_string_lossy().into_owned()),
-    );
-    parts.join("/")
 }

@@ -6,15 +6,22 @@
 //!   selection of one part ([`load_mesh`], [`MeshRef`]);
 //! * [`export`]: glTF 2.0 export ([`export_gltf`]);
 //! * [`history_file`]: versioned RON edit histories with an inline or hashed base scene
-//!   ([`read_history`], [`save_history`]).
+//!   ([`read_history`], [`save_history`]);
+//! * [`project`]: Studio projects, a scene file with its history beside it ([`Project`]:
+//!   open, save, save as with mesh sources rewritten, import, export), and the embedded
+//!   default scene ([`embedded`]).
+//!
+//! Meshes can also be decoded from memory ([`load_rest_mesh_from_bytes`]).
 //!
 //! Every error is an [`IoError`] naming the file (and the scene node). Every file is written
 //! atomically ([`write_atomic`]): a failed write never leaves a half-written file.
 
+pub mod embedded;
 pub mod error;
 pub mod export;
 pub mod history_file;
 pub mod mesh;
+pub mod project;
 pub mod scene;
 
 use std::io::Write as _;
@@ -26,7 +33,12 @@ pub use history_file::{
     Base, LoadedHistory, SaveBase, document_hash, is_history_file, is_history_text, read_history,
     save_history,
 };
-pub use mesh::{MeshRef, load_mesh, load_rest_mesh};
+pub use mesh::{
+    MeshFormat, MeshRef, load_mesh, load_mesh_from_bytes, load_rest_mesh, load_rest_mesh_from_bytes,
+};
+pub use project::{
+    EmbeddedMesh, ImportedMesh, Project, ProjectWarning, history_path_for, scene_path_for,
+};
 pub use scene::{
     LoadedMesh, LoadedScene, check_scene, load_scene, parse_scene, read_scene, save_scene,
 };

@@ -91,18 +91,69 @@ pub fn extension(path: &Path) -> String {
         .to_ascii_lowercase()
 }
 
-/// Loads the mesh `r` refers to, as stored (not yet validated or welded).
-pub fn load_mesh(r: &MeshRef) -> Result<Mesh> {
-    let mesh = match extension(&r.path).as_str() {
-        "glb" | "gltf" => load_gltf(&r.path, r.select.as_deref())?,
-        "obj" => load_obj(&r.path, r.select.as_deref())?,
-        other => {
-            return Err(IoError::UnsupportedExtension {
-                path: r.path.clone(),
+/// The mesh file formats the importer reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MeshFormat {
+    /// glTF 2.0, binary (`.glb`) or JSON (`.gltf`); the decoder tells them apart by content.
+    Gltf,
+    /// Wavefront OBJ (`.obj`).
+    Obj,
+}
+
+impl MeshFormat {
+    /// The format of a file from its extension (case-insensitive): `.glb` and `.gltf` are
+    /// [`MeshFormat::Gltf`], `.obj` is [`MeshFormat::Obj`]; anything else is an
+    /// [`IoError::UnsupportedExtension`] naming the file.
+    pub fn from_path(path: &Path) -> Result<Self> {
+        match extension(path).as_str() {
+            "glb" | "gltf" => Ok(Self::Gltf),
+            "obj" => Ok(Self::Obj),
+            other => Err(IoError::UnsupportedExtension {
+                path: path.to_owned(),
                 extension: other.to_owned(),
                 expected: ".glb, .gltf or .obj",
-            });
+            }),
         }
+    }
+}
+
+/// Loads the mesh `r` refers to, as stored (not yet validated or welded).
+pub fn load_mesh(r: &MeshRef) -> Result<Mesh> {
+    let format = MeshFormat::from_path(&r.path)?;
+    let bytes = std::fs::read(&r.path).map_err(|source| IoError::Read {
+        path: r.path.clone(),
+        source,
+    })?;
+    let base = crate::scene::scene_dir(&r.path);
+    decode(&bytes, format, r, Some(base))
+}
+
+/// Loads, validates and welds the mesh `r` refers to.
+pub fn load_rest_mesh(r: &MeshRef) -> Result<RestMesh> {
+    weld(load_mesh(r)?, r)
+}
+
+/// Decodes a mesh held in memory (for example embedded in a program with `include_bytes!`),
+/// as stored (not yet validated or welded). `name` is the source as a scene would write it,
+/// with an optional `#name` selection of one part ([`MeshRef::parse`]); it names the mesh in
+/// errors exactly like a file path does. A glTF file in memory cannot refer to external
+/// buffer files (only to the binary chunk or to `data:` URIs).
+pub fn load_mesh_from_bytes(bytes: &[u8], format: MeshFormat, name: &str) -> Result<Mesh> {
+    decode(bytes, format, &MeshRef::parse(name), None)
+}
+
+/// [`load_mesh_from_bytes`], then validated and welded like [`load_rest_mesh`].
+pub fn load_rest_mesh_from_bytes(bytes: &[u8], format: MeshFormat, name: &str) -> Result<RestMesh> {
+    let r = MeshRef::parse(name);
+    weld(decode(bytes, format, &r, None)?, &r)
+}
+
+/// Decodes `bytes` in `format`; `r` names the source and selects the part, `base` is the
+/// directory external glTF buffers are resolved against (`None`: none may be used).
+fn decode(bytes: &[u8], format: MeshFormat, r: &MeshRef, base: Option<&Path>) -> Result<Mesh> {
+    let mesh = match format {
+        MeshFormat::Gltf => load_gltf(bytes, &r.path, base, r.select.as_deref())?,
+        MeshFormat::Obj => load_obj(bytes, &r.path, r.select.as_deref())?,
     };
     if mesh.indices.is_empty() {
         return Err(IoError::EmptyMesh {
@@ -113,9 +164,8 @@ pub fn load_mesh(r: &MeshRef) -> Result<Mesh> {
     Ok(mesh)
 }
 
-/// Loads, validates and welds the mesh `r` refers to.
-pub fn load_rest_mesh(r: &MeshRef) -> Result<RestMesh> {
-    let mesh = load_mesh(r)?;
+/// Validates and welds a loaded mesh; errors name `r`.
+fn weld(mesh: Mesh, r: &MeshRef) -> Result<RestMesh> {
     let name = r.display_path();
     RestMesh::new(mesh, &name.display().to_string())
         .map_err(|source| IoError::InvalidMesh { path: name, source })
@@ -173,12 +223,8 @@ impl Merger {
     }
 }
 
-fn load_obj(path: &Path, select: Option<&str>) -> Result<Mesh> {
-    let file = std::fs::File::open(path).map_err(|source| IoError::Read {
-        path: path.to_owned(),
-        source,
-    })?;
-    let mut reader = std::io::BufReader::new(file);
+fn load_obj(bytes: &[u8], path: &Path, select: Option<&str>) -> Result<Mesh> {
+    let mut reader = bytes;
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,
@@ -240,14 +286,9 @@ fn gltf_error(path: &Path) -> impl FnOnce(gltf::Error) -> IoError + '_ {
     }
 }
 
-fn load_gltf(path: &Path, select: Option<&str>) -> Result<Mesh> {
-    let bytes = std::fs::read(path).map_err(|source| IoError::Read {
-        path: path.to_owned(),
-        source,
-    })?;
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(&bytes).map_err(gltf_error(path))?;
-    let base = crate::scene::scene_dir(path);
-    let buffers = gltf::import_buffers(&document, Some(base), blob).map_err(gltf_error(path))?;
+fn load_gltf(bytes: &[u8], path: &Path, base: Option<&Path>, select: Option<&str>) -> Result<Mesh> {
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(bytes).map_err(gltf_error(path))?;
+    let buffers = gltf::import_buffers(&document, base, blob).map_err(gltf_error(path))?;
 
     // Mesh instances with their world transforms.
     let mut instances: Vec<(gltf::Mesh<'_>, Mat4)> = Vec::new();
