@@ -153,7 +153,7 @@ pub fn attach_mesh_evaluation(
         let handle = meshes.add(render_mesh(rest));
         let evaluation = MeshEvaluation {
             rest: Arc::clone(rest),
-            evaluator: Some(MeshEvaluator::new(&node.name, Arc::clone(rest))),
+            evaluator: Some(MeshEvaluator::new(&node.name, (**rest).clone())),
             task: None,
             seen_revision: None,
             heat_key: None,

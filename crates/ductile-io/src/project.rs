@@ -311,6 +311,15 @@ impl Project {
         &self.history
     }
 
+    /// Replaces the document and its history with ones edited elsewhere (the Studio keeps the
+    /// live document in its own resource and hands it over before saving or exporting). The
+    /// caller guarantees that `document` is `history`'s base with its first `cursor` steps
+    /// applied.
+    pub fn set_state(&mut self, document: Document, history: History) {
+        self.document = document;
+        self.history = history;
+    }
+
     /// True when the document differs from the one last opened or saved.
     #[must_use]
     pub fn is_modified(&self) -> bool {

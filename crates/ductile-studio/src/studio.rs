@@ -240,7 +240,10 @@ fn apply_viewport(
         physical_size: end.saturating_sub(pos).max(UVec2::ONE),
         ..default()
     };
-    if camera.viewport.as_ref() != Some(&wanted) {
+    let same = camera.viewport.as_ref().is_some_and(|v| {
+        v.physical_position == wanted.physical_position && v.physical_size == wanted.physical_size
+    });
+    if !same {
         camera.viewport = Some(wanted);
     }
 }

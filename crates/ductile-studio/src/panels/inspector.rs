@@ -117,9 +117,9 @@ impl Inspector {
                         .add(egui::DragValue::new(radius).range(1e-4..=1e4).speed(0.001).prefix("radius "))
                         .changed(),
                     Shape::Box { half_extents } => vec3_edit(ui, half_extents, "half "),
-                    Shape::Capsule { half_length, radius } => {
+                    Shape::Capsule { half_height, radius } => {
                         let a = ui
-                            .add(egui::DragValue::new(half_length).range(0.0..=1e4).speed(0.001).prefix("half length "))
+                            .add(egui::DragValue::new(half_height).range(0.0..=1e4).speed(0.001).prefix("half length "))
                             .changed();
                         let b = ui
                             .add(egui::DragValue::new(radius).range(1e-4..=1e4).speed(0.001).prefix("radius "))
