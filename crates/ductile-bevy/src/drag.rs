@@ -131,10 +131,16 @@ mod tests {
         // Closest points of the X axis and the ray o = (0,0,5), d = (1,2,−5)/√30:
         // b = a·d = 1/√30, w = −o, w·d = 25/√30, w·a = 0, s = b(w·d)/(1 − b²) = 25/29.
         let p = drag_target(r, Vec3::ZERO, Dir3::NEG_Z, AxisConstraint::X, None).unwrap();
-        assert!((p - Vec3::new(25.0 / 29.0, 0.0, 0.0)).length() < 1e-5, "{p}");
+        assert!(
+            (p - Vec3::new(25.0 / 29.0, 0.0, 0.0)).length() < 1e-5,
+            "{p}"
+        );
         // Y axis: b = 2/√30, s = (50/30)/(26/30) = 25/13.
         let p = drag_target(r, Vec3::ZERO, Dir3::NEG_Z, AxisConstraint::Y, None).unwrap();
-        assert!((p - Vec3::new(0.0, 25.0 / 13.0, 0.0)).length() < 1e-5, "{p}");
+        assert!(
+            (p - Vec3::new(0.0, 25.0 / 13.0, 0.0)).length() < 1e-5,
+            "{p}"
+        );
         // A ray along the Z axis: no well-defined point.
         let down = ray(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO);
         assert!(drag_target(down, Vec3::ZERO, Dir3::NEG_Z, AxisConstraint::Z, None).is_none());

@@ -194,8 +194,17 @@ pub fn evaluate_meshes(
             ev.task = None;
             ev.evaluator = Some(evaluator);
             finish(
-                &node.name, ev, result, duration, revision, true, &mut stats, &mut meshes,
-                &mut aabb, &selection, &heat,
+                &node.name,
+                ev,
+                result,
+                duration,
+                revision,
+                true,
+                &mut stats,
+                &mut meshes,
+                &mut aabb,
+                &selection,
+                &heat,
             );
         }
         let wanted_heat = heat_key(&node.name, &selection, &heat);
@@ -234,8 +243,17 @@ pub fn evaluate_meshes(
             let duration = start.elapsed();
             ev.evaluator = Some(evaluator);
             finish(
-                &node.name, ev, result, duration, revision, false, &mut stats, &mut meshes,
-                &mut aabb, &selection, &heat,
+                &node.name,
+                ev,
+                result,
+                duration,
+                revision,
+                false,
+                &mut stats,
+                &mut meshes,
+                &mut aabb,
+                &selection,
+                &heat,
             );
         }
     }
@@ -306,7 +324,8 @@ fn write_positions(ev: &MeshEvaluation, meshes: &mut Assets<Mesh>, aabb: &mut Aa
                 *dst = p.to_array();
             }
         }
-        if let Some(VertexAttributeValues::Float32x3(v)) = mesh.attribute_mut(Mesh::ATTRIBUTE_NORMAL)
+        if let Some(VertexAttributeValues::Float32x3(v)) =
+            mesh.attribute_mut(Mesh::ATTRIBUTE_NORMAL)
         {
             for (dst, p) in v.iter_mut().zip(&deformed.normals) {
                 *dst = p.to_array();
@@ -315,11 +334,19 @@ fn write_positions(ev: &MeshEvaluation, meshes: &mut Assets<Mesh>, aabb: &mut Aa
     } else {
         mesh.insert_attribute(
             Mesh::ATTRIBUTE_POSITION,
-            deformed.positions.iter().map(|p| p.to_array()).collect::<Vec<_>>(),
+            deformed
+                .positions
+                .iter()
+                .map(|p| p.to_array())
+                .collect::<Vec<_>>(),
         );
         mesh.insert_attribute(
             Mesh::ATTRIBUTE_NORMAL,
-            deformed.normals.iter().map(|p| p.to_array()).collect::<Vec<_>>(),
+            deformed
+                .normals
+                .iter()
+                .map(|p| p.to_array())
+                .collect::<Vec<_>>(),
         );
         match deformed.uvs(&ev.rest) {
             Some(uvs) => mesh.insert_attribute(

@@ -135,7 +135,11 @@ pub fn draw_gizmos(
         }
         for p in &g.points {
             let size = eye.map_or(0.005, |e| e.distance(p.position) * 0.006);
-            gizmos.cross(Isometry3d::from_translation(p.position), size, color(p.role));
+            gizmos.cross(
+                Isometry3d::from_translation(p.position),
+                size,
+                color(p.role),
+            );
         }
     }
 }

@@ -134,13 +134,11 @@ pub fn sync_handles(
     if !(doc.is_changed() || selection.is_changed() || drag.is_changed()) {
         return;
     }
-    let mut wanted: HashMap<(String, HandleId), (Vec3, bool)> = wanted_handles(
-        doc.document(),
-        &selection,
-    )
-    .into_iter()
-    .map(|(n, id, p, s)| ((n, id), (p, s)))
-    .collect();
+    let mut wanted: HashMap<(String, HandleId), (Vec3, bool)> =
+        wanted_handles(doc.document(), &selection)
+            .into_iter()
+            .map(|(n, id, p, s)| ((n, id), (p, s)))
+            .collect();
     let material_for = |node: &str, id: &HandleId, selected: bool| {
         assets.as_ref().map(|a| {
             let active = drag
@@ -206,7 +204,12 @@ pub fn scale_handles(
 
 /// The operation that puts handle `id` of `node` at world point `world` (converted to the
 /// node's frame, or its parent's for the origin).
-pub fn handle_operation(doc: &Document, node: &str, id: &HandleId, world: Vec3) -> Result<Operation> {
+pub fn handle_operation(
+    doc: &Document,
+    node: &str,
+    id: &HandleId,
+    world: Vec3,
+) -> Result<Operation> {
     let n = doc.node(node)?;
     let frame = if matches!(id, HandleId::Origin) {
         match &n.parent {
@@ -315,9 +318,13 @@ pub fn drag_handles(
             .as_ref()
             .is_some_and(|k| k.any_pressed([KeyCode::ControlLeft, KeyCode::ControlRight]))
             .then_some(settings.snap_step);
-        if let Some(target) =
-            drag_target(ray, active.start, camera_at.forward(), state.constraint, snap)
-        {
+        if let Some(target) = drag_target(
+            ray,
+            active.start,
+            camera_at.forward(),
+            state.constraint,
+            snap,
+        ) {
             match handle_operation(doc.document(), &active.node, &active.id, target) {
                 Ok(op) => {
                     edits.write(DocumentCommand::Apply {
@@ -338,4 +345,3 @@ pub fn drag_handles(
         state.constraint = AxisConstraint::Free;
     }
 }
-

@@ -85,6 +85,9 @@ mod tests {
         let c = heat_colors(HeatMap::Displacement, &[0.0, 0.5, 2.0]);
         assert_eq!(c[2], ramp(1.0));
         assert_eq!(c[1], ramp(0.25));
-        assert_eq!(heat_colors(HeatMap::Displacement, &[0.0, 0.0])[1], ramp(0.0));
+        assert_eq!(
+            heat_colors(HeatMap::Displacement, &[0.0, 0.0])[1],
+            ramp(0.0)
+        );
     }
 }

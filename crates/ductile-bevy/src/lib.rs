@@ -35,8 +35,8 @@ use crate::evaluate::{
     evaluate_meshes,
 };
 use crate::handles::{
-    DragState, HandleAssets, HandleSettings, axis_keys, drag_handles, scale_handles, select_on_press,
-    sync_handles,
+    DragState, HandleAssets, HandleSettings, axis_keys, drag_handles, scale_handles,
+    select_on_press, sync_handles,
 };
 use crate::rest::RestMeshes;
 use crate::selection::Selection;
@@ -128,9 +128,12 @@ impl Plugin for DuctilePlugin {
             world.contains_resource::<Assets<Mesh>>(),
             world.contains_resource::<Assets<StandardMaterial>>(),
         ) {
-            let sphere = world
-                .resource_mut::<Assets<Mesh>>()
-                .add(Sphere::new(1.0).mesh().ico(2).unwrap_or_else(|_| Sphere::new(1.0).mesh().uv(16, 8)));
+            let sphere = world.resource_mut::<Assets<Mesh>>().add(
+                Sphere::new(1.0)
+                    .mesh()
+                    .ico(2)
+                    .unwrap_or_else(|_| Sphere::new(1.0).mesh().uv(16, 8)),
+            );
             let mut materials = world.resource_mut::<Assets<StandardMaterial>>();
             let unlit = |c: Color| StandardMaterial {
                 base_color: c,
@@ -154,7 +157,9 @@ impl Plugin for DuctilePlugin {
         if world.contains_resource::<Messages<Pointer<DragStart>>>() {
             app.add_systems(
                 Update,
-                ((select_on_press, axis_keys, drag_handles).chain().in_set(DuctileSystems::Input),),
+                ((select_on_press, axis_keys, drag_handles)
+                    .chain()
+                    .in_set(DuctileSystems::Input),),
             );
         }
         if app.world().contains_resource::<GizmoConfigStore>() {
@@ -168,7 +173,10 @@ impl Plugin for DuctilePlugin {
             config.line.width = 2.0;
             app.add_systems(
                 Update,
-                (gizmos::draw_gizmos.in_set(DuctileSystems::Gizmos), scale_handles),
+                (
+                    gizmos::draw_gizmos.in_set(DuctileSystems::Gizmos),
+                    scale_handles,
+                ),
             );
         }
     }

@@ -96,7 +96,11 @@ fn positions(app: &mut App, name: &str) -> Vec<[f32; 3]> {
         .mesh
         .clone();
     let meshes = app.world().resource::<Assets<Mesh>>();
-    match meshes.get(&handle).unwrap().attribute(Mesh::ATTRIBUTE_POSITION) {
+    match meshes
+        .get(&handle)
+        .unwrap()
+        .attribute(Mesh::ATTRIBUTE_POSITION)
+    {
         Some(VertexAttributeValues::Float32x3(v)) => v.clone(),
         other => panic!("unexpected positions {other:?}"),
     }
@@ -126,7 +130,12 @@ fn adding_a_tool_to_the_document_spawns_its_entity() {
     assert!(matches!(scene_node.node.kind, NodeKind::Tool(_)));
     // Undo removes it again.
     send(&mut app, DocumentCommand::Undo);
-    assert!(app.world().resource::<NodeEntities>().get("extra").is_none());
+    assert!(
+        app.world()
+            .resource::<NodeEntities>()
+            .get("extra")
+            .is_none()
+    );
     assert!(app.world().get_entity(e).is_err(), "entity despawned");
 }
 
@@ -151,7 +160,10 @@ fn a_parameter_change_re_evaluates_exactly_the_affected_mesh_once() {
     assert_ne!(positions(&mut app, "a"), before_a, "mesh a deformed anew");
     assert_eq!(positions(&mut app, "b"), before_b);
     // Mesh b looked at the new revision but did not re-evaluate its stack.
-    let b = app.world().get::<MeshEvaluation>(entity(&app, "b")).unwrap();
+    let b = app
+        .world()
+        .get::<MeshEvaluation>(entity(&app, "b"))
+        .unwrap();
     assert_eq!(b.last.as_ref().map(|r| r.revision), evaluated_b);
 }
 
@@ -180,8 +192,13 @@ fn a_drag_is_one_undo_step() {
     // Three frames of one drag of the tool's first control point.
     for z in [0.35, 0.4, 0.5] {
         let doc = app.world().resource::<SceneDocument>().document().clone();
-        let op = handle_operation(&doc, "pull-a", &HandleId::Control(0), Vec3::new(0.0, 0.0, z))
-            .unwrap();
+        let op = handle_operation(
+            &doc,
+            "pull-a",
+            &HandleId::Control(0),
+            Vec3::new(0.0, 0.0, z),
+        )
+        .unwrap();
         send(
             &mut app,
             DocumentCommand::Apply {

@@ -89,7 +89,10 @@ impl FileDialogs {
                 .default_file_name("scene.ron"),
             DialogPurpose::Import => d
                 .title("Import mesh (glTF or OBJ)")
-                .add_file_filter_extensions("Meshes (.glb, .gltf, .obj)", vec!["glb", "gltf", "obj"])
+                .add_file_filter_extensions(
+                    "Meshes (.glb, .gltf, .obj)",
+                    vec!["glb", "gltf", "obj"],
+                )
                 .default_file_filter("Meshes (.glb, .gltf, .obj)"),
             DialogPurpose::Export => d
                 .title("Export deformed meshes as glTF")
@@ -200,7 +203,14 @@ pub fn run_actions(
             StudioAction::Open => dialogs.open(DialogPurpose::Open, project_dir),
             StudioAction::OpenPath(path) => match Project::open(&path) {
                 Ok((p, warnings)) => {
-                    replace_project(p, &mut doc, &mut project, &mut rests, &mut selection, &mut frame);
+                    replace_project(
+                        p,
+                        &mut doc,
+                        &mut project,
+                        &mut rests,
+                        &mut selection,
+                        &mut frame,
+                    );
                     for w in warnings {
                         notice(Err(w.to_string()));
                     }
@@ -212,7 +222,9 @@ pub fn run_actions(
                 if project.0.path().is_none() {
                     dialogs.open(DialogPurpose::SaveAs, project_dir);
                 } else {
-                    project.0.set_state(doc.document().clone(), doc.history().clone());
+                    project
+                        .0
+                        .set_state(doc.document().clone(), doc.history().clone());
                     match project.0.save() {
                         Ok(()) => {
                             doc.mark_saved();
@@ -224,7 +236,9 @@ pub fn run_actions(
             }
             StudioAction::SaveAs => dialogs.open(DialogPurpose::SaveAs, project_dir),
             StudioAction::SaveAsPath(path) => {
-                project.0.set_state(doc.document().clone(), doc.history().clone());
+                project
+                    .0
+                    .set_state(doc.document().clone(), doc.history().clone());
                 match project.0.save_as(&path) {
                     Ok(()) => {
                         // Mesh sources may have been rewritten relative to the new place.
@@ -241,7 +255,9 @@ pub fn run_actions(
             }
             StudioAction::ImportMesh => dialogs.open(DialogPurpose::Import, project_dir),
             StudioAction::ImportPath(path) => {
-                project.0.set_state(doc.document().clone(), doc.history().clone());
+                project
+                    .0
+                    .set_state(doc.document().clone(), doc.history().clone());
                 match project.0.import_mesh(&path) {
                     Ok(imported) => {
                         if let ductile_scene::document::NodeKind::Mesh(m) = &imported.node.kind {
@@ -261,7 +277,9 @@ pub fn run_actions(
             }
             StudioAction::ExportGltf => dialogs.open(DialogPurpose::Export, project_dir),
             StudioAction::ExportPath(path) => {
-                project.0.set_state(doc.document().clone(), doc.history().clone());
+                project
+                    .0
+                    .set_state(doc.document().clone(), doc.history().clone());
                 match project.0.export_gltf(&path) {
                     Ok(()) => notice(Ok(format!("exported {}", path.display()))),
                     Err(e) => notice(Err(ductile_io::report(&e))),

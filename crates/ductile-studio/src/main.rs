@@ -21,7 +21,11 @@ use ductile_io::project::Project;
 
 /// Command-line arguments.
 #[derive(Parser, Debug)]
-#[command(name = "ductile-studio", version, about = "Ductile Studio: non-destructive mesh deformation")]
+#[command(
+    name = "ductile-studio",
+    version,
+    about = "Ductile Studio: non-destructive mesh deformation"
+)]
 struct Args {
     /// A scene (`.ron`) or history (`.history.ron`) file to open instead of the embedded
     /// identikit head.
@@ -57,8 +61,9 @@ fn main() -> anyhow::Result<()> {
     let args = Args::parse();
     // Open the project before the window, so that a bad file is a clear error and no window.
     let (project, warnings) = match &args.scene {
-        Some(path) => Project::open(path)
-            .with_context(|| format!("cannot open '{}'", path.display()))?,
+        Some(path) => {
+            Project::open(path).with_context(|| format!("cannot open '{}'", path.display()))?
+        }
         None => (
             Project::embedded_default().context("cannot open the embedded identikit scene")?,
             Vec::new(),

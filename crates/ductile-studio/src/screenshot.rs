@@ -78,20 +78,21 @@ fn take_screenshot(
     }
     request.taken = true;
     let path = request.path.clone();
-    commands
-        .spawn(Screenshot::primary_window())
-        .observe(move |captured: On<ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| {
-            match save(&captured.image, &path) {
-                Ok(()) => {
-                    info!("screenshot saved to {}", path.display());
-                    exit.write(AppExit::Success);
-                }
-                Err(e) => {
-                    error!("{e:#}");
-                    exit.write(AppExit::error());
-                }
+    commands.spawn(Screenshot::primary_window()).observe(
+        move |captured: On<ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| match save(
+            &captured.image,
+            &path,
+        ) {
+            Ok(()) => {
+                info!("screenshot saved to {}", path.display());
+                exit.write(AppExit::Success);
             }
-        });
+            Err(e) => {
+                error!("{e:#}");
+                exit.write(AppExit::error());
+            }
+        },
+    );
 }
 
 fn save(image: &Image, path: &Path) -> anyhow::Result<()> {

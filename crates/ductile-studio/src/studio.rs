@@ -45,7 +45,8 @@ pub struct FramePending(pub bool);
 impl Plugin for StudioPlugin {
     fn build(&self, app: &mut App) {
         let project = self.project.clone();
-        let doc = SceneDocument::with_history(project.history().clone(), project.document().clone());
+        let doc =
+            SceneDocument::with_history(project.history().clone(), project.document().clone());
         app.add_plugins((
             EguiPlugin::default(),
             MeshPickingPlugin,
@@ -75,8 +76,12 @@ impl Plugin for StudioPlugin {
         .add_systems(
             Update,
             (
-                (shortcuts, run_actions).chain().before(DuctileSystems::Input),
-                load_rest_meshes.before(DuctileSystems::Evaluate).after(DuctileSystems::Sync),
+                (shortcuts, run_actions)
+                    .chain()
+                    .before(DuctileSystems::Input),
+                load_rest_meshes
+                    .before(DuctileSystems::Evaluate)
+                    .after(DuctileSystems::Sync),
                 (orbit_camera, frame_selected, frame_on_open)
                     .chain()
                     .after(DuctileSystems::Evaluate),
@@ -86,7 +91,20 @@ impl Plugin for StudioPlugin {
     }
 }
 
-fn setup(mut commands: Commands) {
+fn setup(mut commands: Commands, mut egui_settings: ResMut<bevy_egui::EguiGlobalSettings>) {
+    // The UI gets its own camera over the whole window: the 3-D camera's viewport is only the
+    // part the panels leave free, and the UI must not be confined to it.
+    egui_settings.auto_create_primary_context = false;
+    commands.spawn((
+        bevy_egui::PrimaryEguiContext,
+        Camera2d,
+        bevy::camera::visibility::RenderLayers::none(),
+        Camera {
+            order: 1,
+            clear_color: ClearColorConfig::None,
+            ..default()
+        },
+    ));
     let orbit = OrbitCamera {
         focus: Vec3::ZERO,
         yaw: 0.35,
@@ -139,9 +157,9 @@ fn load_rest_meshes(
     }
     let missing = rests.missing(doc.document());
     for source in missing {
-        let node = doc.document().nodes.iter().find(|n| {
-            matches!(&n.kind, ductile_scene::document::NodeKind::Mesh(m) if m.source == source)
-        });
+        let node = doc.document().nodes.iter().find(
+            |n| matches!(&n.kind, ductile_scene::document::NodeKind::Mesh(m) if m.source == source),
+        );
         let Some(node) = node else { continue };
         match project.0.rest_mesh(&node.name) {
             Ok(rest) => rests.insert(source, (*rest).clone()),
@@ -164,7 +182,11 @@ fn shortcuts(
     if !keyboard.0 {
         return;
     }
-    let ctrl = keys.any_pressed([KeyCode::ControlLeft, KeyCode::ControlRight, KeyCode::SuperLeft]);
+    let ctrl = keys.any_pressed([
+        KeyCode::ControlLeft,
+        KeyCode::ControlRight,
+        KeyCode::SuperLeft,
+    ]);
     let shift = keys.any_pressed([KeyCode::ShiftLeft, KeyCode::ShiftRight]);
     let pressed = |k| keys.just_pressed(k);
     let action = if ctrl && pressed(KeyCode::KeyZ) && shift || ctrl && pressed(KeyCode::KeyY) {
@@ -233,7 +255,9 @@ fn apply_viewport(
     let Some((min, max)) = rect.0 else { return };
     let scale = window.scale_factor();
     let size = UVec2::new(window.physical_width(), window.physical_height());
-    let pos = (min * scale).as_uvec2().min(size.saturating_sub(UVec2::ONE));
+    let pos = (min * scale)
+        .as_uvec2()
+        .min(size.saturating_sub(UVec2::ONE));
     let end = (max * scale).as_uvec2().min(size);
     let wanted = Viewport {
         physical_position: pos,
@@ -259,7 +283,10 @@ fn draw_grid(
     }
     let floor = meshes
         .iter()
-        .map(|(aabb, at)| at.transform_point(Vec3::from(aabb.center - aabb.half_extents)).y)
+        .map(|(aabb, at)| {
+            at.transform_point(Vec3::from(aabb.center - aabb.half_extents))
+                .y
+        })
         .fold(f32::INFINITY, f32::min);
     let floor = if floor.is_finite() { floor } else { 0.0 };
     let rotation = Quat::from_rotation_x(std::f32::consts::FRAC_PI_2);

@@ -153,14 +153,16 @@ pub fn studio_ui(
     let min = egui::pos2(left.response.rect.right(), top.response.rect.bottom());
     let max = egui::pos2(right.response.rect.left(), bottom.response.rect.top());
     let free = egui::Rect::from_min_max(min, max).intersect(screen);
-    let wanted = (free.width() > 8.0 && free.height() > 8.0)
-        .then(|| (Vec2::new(free.min.x, free.min.y), Vec2::new(free.max.x, free.max.y)));
+    let wanted = (free.width() > 8.0 && free.height() > 8.0).then(|| {
+        (
+            Vec2::new(free.min.x, free.min.y),
+            Vec2::new(free.max.x, free.max.y),
+        )
+    });
     if viewport.0 != wanted {
         viewport.0 = wanted;
     }
-    let pointer_in_free = ctx
-        .pointer_latest_pos()
-        .is_some_and(|p| free.contains(p));
+    let pointer_in_free = ctx.pointer_latest_pos().is_some_and(|p| free.contains(p));
     // Over the free rectangle and not over a window (dialog, menu) on top of it.
     let over_viewport = pointer_in_free
         && ctx.pointer_latest_pos().is_some_and(|p| {
@@ -222,7 +224,11 @@ fn status_info(inputs: &UiInputs, frame_ms: Option<f64>) -> StatusInfo {
             )
         }),
         frame_ms,
-        drag: inputs.drag.active.as_ref().map(|_| inputs.drag.constraint.label()),
+        drag: inputs
+            .drag
+            .active
+            .as_ref()
+            .map(|_| inputs.drag.constraint.label()),
         evaluating,
         error,
         file: inputs.project.0.display_name(),

@@ -66,7 +66,9 @@ impl Inspector {
                 let (label, range) = doc
                     .macros
                     .get(&m.name)
-                    .map_or((m.name.as_str(), (-1.0, 1.0)), |d| (d.label.as_str(), d.range));
+                    .map_or((m.name.as_str(), (-1.0, 1.0)), |d| {
+                        (d.label.as_str(), d.range)
+                    });
                 ui.label(format!("Macro '{}' ({label})", m.name));
                 let mut v = m.value;
                 let r = ui.add(egui::Slider::new(&mut v, range.0..=range.1).text("value"));
@@ -83,7 +85,8 @@ impl Inspector {
                         ui.horizontal(|ui| {
                             ui.label(format!("point {i}"));
                             let mut q = *p;
-                            let a = ui.add(egui::DragValue::new(&mut q.gamma).speed(0.005).prefix("γ "));
+                            let a = ui
+                                .add(egui::DragValue::new(&mut q.gamma).speed(0.005).prefix("γ "));
                             let b = ui.add(
                                 egui::DragValue::new(&mut q.alpha)
                                     .range(0.05..=8.0)
@@ -114,15 +117,33 @@ impl Inspector {
                 let mut shape = v.shape;
                 let changed = match &mut shape {
                     Shape::Sphere { radius } => ui
-                        .add(egui::DragValue::new(radius).range(1e-4..=1e4).speed(0.001).prefix("radius "))
+                        .add(
+                            egui::DragValue::new(radius)
+                                .range(1e-4..=1e4)
+                                .speed(0.001)
+                                .prefix("radius "),
+                        )
                         .changed(),
                     Shape::Box { half_extents } => vec3_edit(ui, half_extents, "half "),
-                    Shape::Capsule { half_height, radius } => {
+                    Shape::Capsule {
+                        half_height,
+                        radius,
+                    } => {
                         let a = ui
-                            .add(egui::DragValue::new(half_height).range(0.0..=1e4).speed(0.001).prefix("half length "))
+                            .add(
+                                egui::DragValue::new(half_height)
+                                    .range(0.0..=1e4)
+                                    .speed(0.001)
+                                    .prefix("half length "),
+                            )
                             .changed();
                         let b = ui
-                            .add(egui::DragValue::new(radius).range(1e-4..=1e4).speed(0.001).prefix("radius "))
+                            .add(
+                                egui::DragValue::new(radius)
+                                    .range(1e-4..=1e4)
+                                    .speed(0.001)
+                                    .prefix("radius "),
+                            )
                             .changed();
                         a || b
                     }
@@ -141,14 +162,24 @@ impl Inspector {
         }
     }
 
-    fn transform(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>, name: &str, t: Transform) {
+    fn transform(
+        &mut self,
+        ui: &mut egui::Ui,
+        cx: &mut PanelContext<'_>,
+        name: &str,
+        t: Transform,
+    ) {
         let doc = cx.doc.document();
         let mut new = t;
         let mut responses = Vec::new();
         ui.label("Transform (parent frame)");
         ui.horizontal(|ui| {
             ui.label("Move");
-            for (v, axis) in [(&mut new.translation.x, "x "), (&mut new.translation.y, "y "), (&mut new.translation.z, "z ")] {
+            for (v, axis) in [
+                (&mut new.translation.x, "x "),
+                (&mut new.translation.y, "y "),
+                (&mut new.translation.z, "z "),
+            ] {
                 responses.push(ui.add(egui::DragValue::new(v).speed(0.001).prefix(axis)));
             }
         });
@@ -165,7 +196,11 @@ impl Inspector {
         let mut uniform = (t.scale.x + t.scale.y + t.scale.z) / 3.0;
         ui.horizontal(|ui| {
             ui.label("Scale");
-            let r = ui.add(egui::DragValue::new(&mut uniform).range(1e-3..=1e3).speed(0.005));
+            let r = ui.add(
+                egui::DragValue::new(&mut uniform)
+                    .range(1e-3..=1e3)
+                    .speed(0.005),
+            );
             if r.changed() {
                 new.scale = Vec3::splat(uniform);
             }
@@ -186,7 +221,12 @@ fn vec3_edit(ui: &mut egui::Ui, v: &mut Vec3, prefix: &str) -> bool {
     ui.horizontal(|ui| {
         for (c, axis) in [(&mut v.x, "x"), (&mut v.y, "y"), (&mut v.z, "z")] {
             changed |= ui
-                .add(egui::DragValue::new(c).range(1e-4..=1e4).speed(0.001).prefix(format!("{prefix}{axis} ")))
+                .add(
+                    egui::DragValue::new(c)
+                        .range(1e-4..=1e4)
+                        .speed(0.001)
+                        .prefix(format!("{prefix}{axis} ")),
+                )
                 .changed();
         }
     });

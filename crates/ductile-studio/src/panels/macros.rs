@@ -55,41 +55,43 @@ impl MacrosPanel {
             }
         });
         let filter = self.filter.to_lowercase();
-        egui::ScrollArea::vertical().id_salt("macros").show(ui, |ui| {
-            for (group, items) in &groups {
-                let visible: Vec<_> = items
-                    .iter()
-                    .filter(|(n, l, _, _)| {
-                        filter.is_empty()
-                            || l.to_lowercase().contains(&filter)
-                            || n.to_lowercase().contains(&filter)
-                            || group.to_lowercase().contains(&filter)
-                    })
-                    .collect();
-                if visible.is_empty() {
-                    continue;
+        egui::ScrollArea::vertical()
+            .id_salt("macros")
+            .show(ui, |ui| {
+                for (group, items) in &groups {
+                    let visible: Vec<_> = items
+                        .iter()
+                        .filter(|(n, l, _, _)| {
+                            filter.is_empty()
+                                || l.to_lowercase().contains(&filter)
+                                || n.to_lowercase().contains(&filter)
+                                || group.to_lowercase().contains(&filter)
+                        })
+                        .collect();
+                    if visible.is_empty() {
+                        continue;
+                    }
+                    egui::CollapsingHeader::new(if group.is_empty() { "Macros" } else { group })
+                        .default_open(true)
+                        .show(ui, |ui| {
+                            for (node, label, value, range) in visible {
+                                let mut v = *value;
+                                let r = ui.add(
+                                    egui::Slider::new(&mut v, range.0..=range.1)
+                                        .text(*label)
+                                        .fixed_decimals(2),
+                                );
+                                if r.clicked() || r.drag_started() {
+                                    cx.selection.node = Some((*node).to_owned());
+                                }
+                                if r.changed()
+                                    && let Ok(op) = Operation::set_macro_value(doc, node, v)
+                                {
+                                    cx.apply_in_gesture(&r, op, format!("macro '{node}'"));
+                                }
+                            }
+                        });
                 }
-                egui::CollapsingHeader::new(if group.is_empty() { "Macros" } else { group })
-                    .default_open(true)
-                    .show(ui, |ui| {
-                        for (node, label, value, range) in visible {
-                            let mut v = *value;
-                            let r = ui.add(
-                                egui::Slider::new(&mut v, range.0..=range.1)
-                                    .text(*label)
-                                    .fixed_decimals(2),
-                            );
-                            if r.clicked() || r.drag_started() {
-                                cx.selection.node = Some((*node).to_owned());
-                            }
-                            if r.changed()
-                                && let Ok(op) = Operation::set_macro_value(doc, node, v)
-                            {
-                                cx.apply_in_gesture(&r, op, format!("macro '{node}'"));
-                            }
-                        }
-                    });
-            }
-        });
+            });
     }
 }

@@ -67,8 +67,7 @@ impl Outliner {
             return; // a cycle; the document check reports it
         }
         for child in children {
-            if !matches!(child.kind, NodeKind::Macro(_)) || cx.selection.is_selected(&child.name)
-            {
+            if !matches!(child.kind, NodeKind::Macro(_)) || cx.selection.is_selected(&child.name) {
                 let child_name = child.name.clone();
                 self.node(ui, doc, &child_name, cx, depth + 1);
             }

@@ -31,7 +31,10 @@ impl StackPanel {
         let Ok(mesh) = doc.mesh(&mesh_name) else {
             return;
         };
-        ui.label(format!("Stack of '{mesh_name}' ({} layers, top last)", mesh.stack.len()));
+        ui.label(format!(
+            "Stack of '{mesh_name}' ({} layers, top last)",
+            mesh.stack.len()
+        ));
         let count = mesh.stack.len();
         egui::ScrollArea::vertical()
             .id_salt("stack")
@@ -40,7 +43,10 @@ impl StackPanel {
                 for (i, layer) in mesh.stack.iter().enumerate() {
                     ui.horizontal(|ui| {
                         let mut enabled = layer.enabled;
-                        if ui.checkbox(&mut enabled, "").on_hover_text("Enabled").changed()
+                        if ui
+                            .checkbox(&mut enabled, "")
+                            .on_hover_text("Enabled")
+                            .changed()
                             && let Ok(op) =
                                 Operation::set_layer_enabled(doc, &mesh_name, i, enabled)
                         {
@@ -59,19 +65,24 @@ impl StackPanel {
                                 .prefix("w "),
                         );
                         if r.changed()
-                            && let Ok(op) =
-                                Operation::set_layer_weight(doc, &mesh_name, i, weight)
+                            && let Ok(op) = Operation::set_layer_weight(doc, &mesh_name, i, weight)
                         {
                             let label = format!("weight of layer {i} of '{mesh_name}'");
                             cx.apply_in_gesture(&r, op, label);
                         }
-                        if ui.add_enabled(i > 0, egui::Button::new("▼")).clicked() {
+                        if ui.add_enabled(i > 0, egui::Button::new("down")).clicked() {
                             cx.apply(Operation::move_layer(&mesh_name, i, i - 1));
                         }
-                        if ui.add_enabled(i + 1 < count, egui::Button::new("▲")).clicked() {
+                        if ui
+                            .add_enabled(i + 1 < count, egui::Button::new("up"))
+                            .clicked()
+                        {
                             cx.apply(Operation::move_layer(&mesh_name, i, i + 1));
                         }
-                        if ui.button("✖").on_hover_text("Remove the layer").clicked()
+                        if ui
+                            .button("remove")
+                            .on_hover_text("Remove the layer")
+                            .clicked()
                             && let Ok(op) = Operation::remove_layer(doc, &mesh_name, i)
                         {
                             cx.apply(op);
