@@ -151,8 +151,8 @@ fn now_ms() -> u64 {
 pub enum DocumentCommand {
     /// Apply an operation and record it.
     Apply {
-        /// The edit.
-        op: Operation,
+        /// The edit (boxed: an operation can hold a whole node).
+        op: Box<Operation>,
         /// The history label ("" = the operation's own description).
         label: String,
         /// The gesture the edit belongs to (consecutive edits of one gesture are one step).
@@ -171,7 +171,7 @@ impl DocumentCommand {
     #[must_use]
     pub fn apply(op: Operation) -> Self {
         Self::Apply {
-            op,
+            op: Box::new(op),
             label: String::new(),
             gesture: None,
         }
@@ -194,7 +194,7 @@ pub fn apply_document_commands(
 ) {
     for command in commands.read() {
         let result = match command.clone() {
-            DocumentCommand::Apply { op, label, gesture } => doc.apply(op, label, gesture),
+            DocumentCommand::Apply { op, label, gesture } => doc.apply(*op, label, gesture),
             DocumentCommand::Undo => doc.undo().map(|_| ()),
             DocumentCommand::Redo => doc.redo().map(|_| ()),
             DocumentCommand::Jump(n) => doc.jump(n),

@@ -29,14 +29,6 @@ pub enum DuctileBevyError {
         /// The node.
         node: String,
     },
-    /// A mesh node whose rest mesh has not been loaded.
-    #[error("mesh '{mesh}': its rest mesh ('{source_path}') is not loaded")]
-    RestMeshMissing {
-        /// The mesh node.
-        mesh: String,
-        /// The node's source.
-        source_path: String,
-    },
 }
 
 /// Shorthand for results of this crate.

@@ -56,10 +56,14 @@ pub fn role_color(role: Role) -> Color {
     }
 }
 
+/// What the cached gizmos were built from: document revision, selected node, selected layer
+/// (mesh, index) and whether unselected macros are drawn.
+type GizmoKey = (u64, Option<String>, Option<(String, usize)>, bool);
+
 /// World-space gizmos of the document, rebuilt when the document or selection changes.
 #[derive(Default)]
 pub struct GizmoCache {
-    key: Option<(u64, Option<String>, Option<(String, usize)>, bool)>,
+    key: Option<GizmoKey>,
     items: Vec<(Gizmo, bool)>,
 }
 

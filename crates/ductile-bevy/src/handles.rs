@@ -155,7 +155,7 @@ pub fn sync_handles(
         })
     };
     for (entity, marker, mut transform, material) in &mut existing {
-        match wanted.remove(&(marker.node.clone(), marker.id.clone())) {
+        match wanted.remove(&(marker.node.clone(), marker.id)) {
             Some((p, selected)) => {
                 if transform.translation != p {
                     transform.translation = p;
@@ -300,7 +300,7 @@ pub fn drag_handles(
         let gesture = doc.bypass_change_detection().new_gesture();
         state.active = Some(ActiveDrag {
             node: marker.node.clone(),
-            id: marker.id.clone(),
+            id: marker.id,
             start: at.translation(),
             gesture,
         });
@@ -328,7 +328,7 @@ pub fn drag_handles(
             match handle_operation(doc.document(), &active.node, &active.id, target) {
                 Ok(op) => {
                     edits.write(DocumentCommand::Apply {
-                        op,
+                        op: Box::new(op),
                         label: format!("drag '{}'", active.node),
                         gesture: Some(active.gesture),
                     });

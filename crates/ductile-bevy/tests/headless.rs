@@ -202,7 +202,7 @@ fn a_drag_is_one_undo_step() {
         send(
             &mut app,
             DocumentCommand::Apply {
-                op,
+                op: Box::new(op),
                 label: "drag".to_owned(),
                 gesture: Some(gesture),
             },

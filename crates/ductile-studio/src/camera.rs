@@ -148,7 +148,7 @@ pub struct FrameRequest(pub bool);
 
 /// F frames the selected node (a mesh's deformed bounds, a tool's or volume's handles), or
 /// every mesh when nothing is selected.
-#[allow(clippy::type_complexity)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 pub fn frame_selected(
     keys: Res<ButtonInput<KeyCode>>,
     keyboard: Res<KeyboardToViewport>,
@@ -160,7 +160,7 @@ pub fn frame_selected(
     mut cameras: Query<(&mut OrbitCamera, &Projection)>,
 ) {
     let asked = std::mem::take(&mut request.0);
-    if !asked && !(keyboard.0 && keys.just_pressed(KeyCode::KeyF)) {
+    if !(asked || keyboard.0 && keys.just_pressed(KeyCode::KeyF)) {
         return;
     }
     let Ok((mut orbit, projection)) = cameras.single_mut() else {

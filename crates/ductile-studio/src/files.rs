@@ -266,7 +266,7 @@ pub fn run_actions(
                         selection.node = Some(imported.node.name.clone());
                         let op = Operation::add_node(doc.document(), imported.node);
                         edits.write(DocumentCommand::Apply {
-                            op,
+                            op: Box::new(op),
                             label: format!("import {}", path.display()),
                             gesture: None,
                         });
@@ -296,7 +296,7 @@ pub fn run_actions(
                     match Operation::remove_node_and_references(doc.document(), &name) {
                         Ok(op) => {
                             edits.write(DocumentCommand::Apply {
-                                op,
+                                op: Box::new(op),
                                 label: format!("delete '{name}'"),
                                 gesture: None,
                             });

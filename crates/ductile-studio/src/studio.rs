@@ -272,7 +272,8 @@ fn apply_viewport(
     }
 }
 
-/// The ground grid: 1 cm cells over 1 m, at the lowest point of the meshes.
+/// The ground grid, under the meshes at their lowest point, centred on them and three times as
+/// wide as they are, with cells of a round size (a power of ten) about a tenth of their width.
 fn draw_grid(
     view: Res<ViewOptions>,
     meshes: Query<(&bevy::camera::primitives::Aabb, &GlobalTransform), With<MeshEvaluation>>,
@@ -281,21 +282,52 @@ fn draw_grid(
     if !view.grid {
         return;
     }
-    let floor = meshes
-        .iter()
-        .map(|(aabb, at)| {
-            at.transform_point(Vec3::from(aabb.center - aabb.half_extents))
-                .y
-        })
-        .fold(f32::INFINITY, f32::min);
-    let floor = if floor.is_finite() { floor } else { 0.0 };
+    let mut low = Vec3::splat(f32::INFINITY);
+    let mut high = Vec3::splat(f32::NEG_INFINITY);
+    for (aabb, at) in &meshes {
+        let (min, max) = (
+            Vec3::from(aabb.center - aabb.half_extents),
+            Vec3::from(aabb.center + aabb.half_extents),
+        );
+        for corner in 0..8 {
+            let local = Vec3::new(
+                if corner & 1 == 0 { min.x } else { max.x },
+                if corner & 2 == 0 { min.y } else { max.y },
+                if corner & 4 == 0 { min.z } else { max.z },
+            );
+            let world = at.transform_point(local);
+            low = low.min(world);
+            high = high.max(world);
+        }
+    }
+    let (grid_at, cells, cell) = ground_grid(low, high);
     let rotation = Quat::from_rotation_x(std::f32::consts::FRAC_PI_2);
     gizmos.grid(
-        Isometry3d::new(Vec3::new(0.0, floor, 0.0), rotation),
-        UVec2::splat(20),
-        Vec2::splat(0.05),
+        Isometry3d::new(grid_at, rotation),
+        UVec2::splat(cells),
+        Vec2::splat(cell),
         Color::srgba(0.6, 0.6, 0.65, 0.35),
     );
+}
+
+/// Where the ground grid lies for meshes whose world bounds are `low..high`: its centre, its
+/// number of cells per side and its cell size. With no meshes (infinite bounds) it is 20 cells of
+/// 10 cm around the origin.
+#[must_use]
+fn ground_grid(low: Vec3, high: Vec3) -> (Vec3, u32, f32) {
+    if !(low.is_finite() && high.is_finite()) {
+        return (Vec3::ZERO, 20, 0.1);
+    }
+    let width = (high.x - low.x).max(high.z - low.z).max(1e-3);
+    let cell = 10f32.powf((width / 10.0).log10().round());
+    let cells = ((3.0 * width / cell - 1e-3).ceil() as u32).clamp(4, 200);
+    let cells = cells + cells % 2;
+    let centre = Vec3::new(
+        ((low.x + high.x) * 0.5 / cell).round() * cell,
+        low.y,
+        ((low.z + high.z) * 0.5 / cell).round() * cell,
+    );
+    (centre, cells, cell)
 }
 
 fn apply_wireframe(
@@ -330,5 +362,31 @@ fn window_title(
         if window.title != title {
             window.title = title;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ground_grid_is_under_the_meshes_and_three_times_as_wide() {
+        // A head 0.2 m wide standing on y = -0.1: cells of 10^round(log10(0.02)) = 1 cm,
+        // ceil(0.6 / 0.01) = 60 cells, centred on the rounded middle at the lowest point.
+        let (centre, cells, cell) =
+            ground_grid(Vec3::new(-0.1, -0.1, -0.05), Vec3::new(0.1, 0.15, 0.07));
+        assert!((cell - 0.01).abs() < 1e-6, "cell {cell}");
+        assert_eq!(cells, 60);
+        assert!(
+            (centre - Vec3::new(0.0, -0.1, 0.01)).length() < 1e-6,
+            "{centre}"
+        );
+    }
+
+    #[test]
+    fn ground_grid_without_meshes_is_around_the_origin() {
+        let (centre, cells, cell) =
+            ground_grid(Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        assert_eq!((centre, cells, cell), (Vec3::ZERO, 20, 0.1));
     }
 }

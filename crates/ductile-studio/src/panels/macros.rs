@@ -14,12 +14,14 @@ pub struct MacrosPanel {
     filter: String,
 }
 
+/// One slider: the macro node's name, the macro's label, its value and its range.
+type MacroRow<'a> = (&'a str, &'a str, f32, (f32, f32));
+
 impl MacrosPanel {
     /// Draws the sliders.
     pub fn show(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>) {
         let doc = cx.doc.document();
-        // group → [(node, label, value, range)]
-        let mut groups: BTreeMap<&str, Vec<(&str, &str, f32, (f32, f32))>> = BTreeMap::new();
+        let mut groups: BTreeMap<&str, Vec<MacroRow<'_>>> = BTreeMap::new();
         for node in &doc.nodes {
             if let NodeKind::Macro(m) = &node.kind {
                 let (label, group, range) = match doc.macros.get(&m.name) {

@@ -36,8 +36,11 @@ impl PanelContext<'_> {
     /// gesture's edits become one undo step.
     pub fn apply_in_gesture(&mut self, response: &egui::Response, op: Operation, label: String) {
         let gesture = self.gestures.for_widget(response);
-        self.commands
-            .push(DocumentCommand::Apply { op, label, gesture });
+        self.commands.push(DocumentCommand::Apply {
+            op: Box::new(op),
+            label,
+            gesture,
+        });
     }
 }
 
