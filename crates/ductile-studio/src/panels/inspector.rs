@@ -187,7 +187,7 @@ impl Inspector {
         ui.horizontal(|ui| {
             ui.label("Turn°");
             for (v, axis) in [(&mut rx, "x "), (&mut ry, "y "), (&mut rz, "z ")] {
-                let mut deg = v.to_degrees();
+                let mut deg = v.to_degrees() + 0.0; // + 0.0 shows -0 as 0.
                 let r = ui.add(egui::DragValue::new(&mut deg).speed(0.5).prefix(axis));
                 *v = deg.to_radians();
                 responses.push(r);
