@@ -18,7 +18,9 @@ pub struct SceneDocument {
     document: Document,
     history: History,
     revision: u64,
-    saved_revision: u64,
+    /// The document as last loaded or saved, to tell whether the live one differs.
+    saved: Document,
+    modified: bool,
     next_gesture: u64,
 }
 
@@ -40,10 +42,11 @@ impl SceneDocument {
     #[must_use]
     pub fn with_history(history: History, document: Document) -> Self {
         Self {
+            saved: document.clone(),
             document,
             history,
             revision: 0,
-            saved_revision: 0,
+            modified: false,
             next_gesture: 1,
         }
     }
@@ -53,7 +56,13 @@ impl SceneDocument {
     pub fn replace(&mut self, history: History, document: Document) {
         self.document = document;
         self.history = history;
+        self.changed();
+    }
+
+    /// Moves the revision on and compares the live document with the saved one.
+    fn changed(&mut self) {
         self.revision += 1;
+        self.modified = self.document != self.saved;
     }
 
     /// The live document.
@@ -74,15 +83,17 @@ impl SceneDocument {
         self.revision
     }
 
-    /// True when the document changed since it was loaded or last marked saved.
+    /// True when the document differs from the one last loaded or marked saved (undoing
+    /// back to the saved state makes it unmodified again).
     #[must_use]
     pub fn is_modified(&self) -> bool {
-        self.revision != self.saved_revision
+        self.modified
     }
 
     /// Records that the current state is what is on disk.
     pub fn mark_saved(&mut self) {
-        self.saved_revision = self.revision;
+        self.saved = self.document.clone();
+        self.modified = false;
     }
 
     /// A new gesture id: edits pushed with the same id (a drag, a slider movement) merge
@@ -103,7 +114,7 @@ impl SceneDocument {
     ) -> Result<()> {
         self.history
             .push(&mut self.document, op, label, now_ms(), gesture)?;
-        self.revision += 1;
+        self.changed();
         Ok(())
     }
 
@@ -111,7 +122,7 @@ impl SceneDocument {
     pub fn undo(&mut self) -> Result<bool> {
         let done = self.history.undo(&mut self.document)?;
         if done {
-            self.revision += 1;
+            self.changed();
         }
         Ok(done)
     }
@@ -120,7 +131,7 @@ impl SceneDocument {
     pub fn redo(&mut self) -> Result<bool> {
         let done = self.history.redo(&mut self.document)?;
         if done {
-            self.revision += 1;
+            self.changed();
         }
         Ok(done)
     }
@@ -134,7 +145,7 @@ impl SceneDocument {
             });
         }
         self.history.jump(&mut self.document, n)?;
-        self.revision += 1;
+        self.changed();
         Ok(())
     }
 }
@@ -206,5 +217,42 @@ pub fn apply_document_commands(
                 status.last_error = Some(e.to_string());
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ductile_scene::document::{Node, NodeKind};
+    use ductile_scene::transform::Transform;
+
+    fn group(name: &str) -> Operation {
+        let node = Node {
+            name: name.to_owned(),
+            parent: None,
+            transform: Transform::IDENTITY,
+            kind: NodeKind::Group,
+        };
+        Operation::add_node(&Document::default(), node)
+    }
+
+    #[test]
+    fn undoing_back_to_the_saved_state_is_unmodified() -> Result<()> {
+        let mut doc = SceneDocument::default();
+        assert!(!doc.is_modified());
+        doc.apply(group("a"), "", None)?;
+        assert!(doc.is_modified());
+        assert!(doc.undo()?);
+        assert!(!doc.is_modified(), "back at the loaded state");
+        assert!(doc.redo()?);
+        doc.mark_saved();
+        assert!(!doc.is_modified());
+        doc.apply(group("b"), "", None)?;
+        assert!(doc.is_modified());
+        doc.jump(1)?;
+        assert!(!doc.is_modified(), "back at the saved state");
+        doc.jump(0)?;
+        assert!(doc.is_modified(), "before the saved state");
+        Ok(())
     }
 }

@@ -5,7 +5,8 @@
 //! the wheel zooms. Trackpad: two-finger scroll orbits (Shift: pans), pinch zooms.
 
 use bevy::input::gestures::PinchGesture;
-use bevy::input::mouse::{AccumulatedMouseMotion, MouseScrollUnit, MouseWheel};
+use bevy::input::mouse::{MouseScrollUnit, MouseWheel};
+use bevy::window::PrimaryWindow;
 use bevy::prelude::*;
 use ductile_bevy::prelude::*;
 
@@ -61,12 +62,15 @@ pub struct PointerOverViewport(pub bool);
 #[derive(Resource, Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct KeyboardToViewport(pub bool);
 
-/// Orbits, pans and zooms from mouse buttons, wheel and trackpad gestures.
+/// Orbits, pans and zooms from mouse buttons, wheel and trackpad gestures. Drags follow the
+/// cursor's position in the window (not raw device motion, which absolute pointers such as
+/// tablets, remote desktops and X test input do not always send).
 #[allow(clippy::too_many_arguments)]
 pub fn orbit_camera(
     buttons: Res<ButtonInput<MouseButton>>,
     keys: Res<ButtonInput<KeyCode>>,
-    motion: Res<AccumulatedMouseMotion>,
+    windows: Query<&Window, With<PrimaryWindow>>,
+    mut last_cursor: Local<Option<Vec2>>,
     mut wheel: MessageReader<MouseWheel>,
     mut pinch: MessageReader<PinchGesture>,
     over: Res<PointerOverViewport>,
@@ -98,7 +102,12 @@ pub fn orbit_camera(
         _ => std::f32::consts::FRAC_PI_4,
     };
     let pan_scale = orbit.distance * (fov * 0.5).tan() * 2.0 / 800.0;
-    let delta = motion.delta;
+    let cursor = windows.single().ok().and_then(Window::cursor_position);
+    let delta = match (*last_cursor, cursor) {
+        (Some(a), Some(b)) => b - a,
+        _ => Vec2::ZERO,
+    };
+    *last_cursor = cursor;
     if *orbiting && drag.active.is_none() && delta != Vec2::ZERO {
         let pan = buttons.pressed(MouseButton::Right)
             || (shift && buttons.any_pressed([MouseButton::Left, MouseButton::Middle]));

@@ -172,22 +172,27 @@ fn load_rest_meshes(
     }
 }
 
-/// Keyboard shortcuts (ignored while a text field has the keyboard).
+/// Keyboard shortcuts (ignored while a text field has the keyboard). Escape clears the
+/// node selection.
 fn shortcuts(
     keys: Res<ButtonInput<KeyCode>>,
     keyboard: Res<KeyboardToViewport>,
     drag: Res<DragState>,
+    mut selection: ResMut<Selection>,
     mut actions: MessageWriter<StudioAction>,
 ) {
     if !keyboard.0 {
         return;
     }
-    let ctrl = keys.any_pressed([
-        KeyCode::ControlLeft,
-        KeyCode::ControlRight,
-        KeyCode::SuperLeft,
-    ]);
-    let shift = keys.any_pressed([KeyCode::ShiftLeft, KeyCode::ShiftRight]);
+    if keys.just_pressed(KeyCode::Escape) && drag.active.is_none() && selection.node.is_some() {
+        selection.node = None;
+    }
+    // A modifier released in the same frame as the key still counts: at low frame rates
+    // (software rendering) a quick Ctrl+Z arrives as press and release of both in one frame.
+    let held = |k: [KeyCode; 2]| keys.any_pressed(k) || keys.any_just_released(k);
+    let ctrl = held([KeyCode::ControlLeft, KeyCode::ControlRight])
+        || held([KeyCode::SuperLeft, KeyCode::SuperRight]);
+    let shift = held([KeyCode::ShiftLeft, KeyCode::ShiftRight]);
     let pressed = |k| keys.just_pressed(k);
     let action = if ctrl && pressed(KeyCode::KeyZ) && shift || ctrl && pressed(KeyCode::KeyY) {
         Some(StudioAction::Redo)

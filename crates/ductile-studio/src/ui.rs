@@ -172,7 +172,9 @@ pub fn studio_ui(
     if over.0 != over_viewport {
         over.0 = over_viewport;
     }
-    let keys_free = !ctx.egui_wants_keyboard_input();
+    // Only a text field keeps the shortcuts from the viewport: a slider keeps the keyboard
+    // focus after it is dragged, and Ctrl+Z must still undo that drag.
+    let keys_free = !ctx.text_edit_focused();
     if keyboard.0 != keys_free {
         keyboard.0 = keys_free;
     }

@@ -83,7 +83,10 @@ impl MacrosPanel {
                                         .text(*label)
                                         .fixed_decimals(2),
                                 );
-                                if r.clicked() || r.drag_started() {
+                                // Selected on release, not on press: the inspector above
+                                // grows when a macro is selected, and the slider must not
+                                // move under the pointer while it is dragged.
+                                if r.clicked() || r.drag_stopped() {
                                     cx.selection.node = Some((*node).to_owned());
                                 }
                                 if r.changed()
