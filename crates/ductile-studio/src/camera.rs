@@ -6,8 +6,8 @@
 
 use bevy::input::gestures::PinchGesture;
 use bevy::input::mouse::{MouseScrollUnit, MouseWheel};
-use bevy::window::PrimaryWindow;
 use bevy::prelude::*;
+use bevy::window::PrimaryWindow;
 use ductile_bevy::prelude::*;
 
 /// An orbiting camera: it looks at `focus` from `distance` away, at `yaw` around +Y and
