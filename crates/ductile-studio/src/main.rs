@@ -24,7 +24,10 @@ use ductile_io::project::Project;
 #[command(
     name = "ductile-studio",
     version,
-    about = "Ductile Studio: non-destructive mesh deformation"
+    about = "Ductile Studio: non-destructive mesh deformation",
+    after_help = "The built-in identikit head is \"Infinite, 3D Head Scan\" by Lee Perry-Smith \
+                  (Infinite-Realities, www.ir-ltd.net), based on a work at www.triplegangers.com, \
+                  licensed CC BY 3.0 (https://creativecommons.org/licenses/by/3.0/)."
 )]
 struct Args {
     /// A scene (`.ron`) or history (`.history.ron`) file to open instead of the embedded
