@@ -50,7 +50,10 @@ fn a_malformed_scene_is_refused_with_its_path_and_place() {
     let out = studio(&["--scene", path.to_str().unwrap()]);
     assert!(!out.status.success());
     let err = stderr(&out);
-    assert!(err.contains("broken.ron:3:"), "the error names the file and line: {err}");
+    assert!(
+        err.contains("broken.ron:3:"),
+        "the error names the file and line: {err}"
+    );
 }
 
 #[test]
