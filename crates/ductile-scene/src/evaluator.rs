@@ -422,6 +422,8 @@ pub struct MeshEvaluator {
     /// Face normals `(b − a) × (c − a)` of the output's welded triangles; empty when not
     /// known (they are rebuilt with the next full output).
     faces: Vec<Vec3>,
+    /// Scratch space for the welded normals of a full output rebuild.
+    normals: Vec<Vec3>,
     dirty: Dirty,
     /// How many stages were refreshed (see [`refresh`]) since the evaluator was made.
     refreshed: usize,
@@ -445,6 +447,7 @@ impl MeshEvaluator {
             output: None,
             links: None,
             faces: Vec::new(),
+            normals: Vec::new(),
             dirty: Dirty::default(),
             refreshed: 0,
         }
@@ -820,17 +823,23 @@ impl MeshEvaluator {
             // Every normal: the face normals once, then each vertex's sum over its triangles
             // in ascending order (the same additions as `smooth_normals`), in parallel;
             // then scattered to the stored copies.
-            *faces = triangles
-                .par_iter()
+            // (Both buffers are kept between updates: fresh ones of this size would cost
+            // a page fault every 4 KiB.)
+            faces.resize(triangles.len(), Vec3::ZERO);
+            faces
+                .par_iter_mut()
+                .zip(triangles.par_iter())
                 .with_min_len(CHUNK)
-                .map(|&t| face_normal(t, positions))
-                .collect();
+                .for_each(|(f, &t)| *f = face_normal(t, positions));
             let faces = &*faces;
-            let normals: Vec<Vec3> = (0..positions.len() as u32)
-                .into_par_iter()
+            let normals = &mut self.normals;
+            normals.resize(positions.len(), Vec3::ZERO);
+            normals
+                .par_iter_mut()
+                .enumerate()
                 .with_min_len(CHUNK)
-                .map(|v| vertex_normal(v, links, faces))
-                .collect();
+                .for_each(|(v, n)| *n = vertex_normal(v as u32, links, faces));
+            let normals = &*normals;
             out.positions
                 .par_iter_mut()
                 .zip(out.normals.par_iter_mut())
