@@ -819,7 +819,49 @@ impl MeshEvaluator {
         let triangles = &topology.triangles;
         let positions = &self.positions;
         let faces = &mut self.faces;
-        if faces.len() != triangles.len() || moved.len() * OUTPUT_FULL_DIVISOR > positions.len() {
+        if faces.len() == triangles.len() && moved.len() * OUTPUT_FULL_DIVISOR > positions.len() {
+            // Many moved vertices: sweeps in order (and in parallel) instead of following
+            // each moved vertex. A triangle with a moved corner gets a new face normal; a
+            // stored vertex whose welded vertex has such a triangle gets a new normal.
+            for &v in &moved {
+                links.mark[v as usize] = true;
+            }
+            let mark = &links.mark;
+            links
+                .tri_mark
+                .par_iter_mut()
+                .zip(faces.par_iter_mut())
+                .zip(triangles.par_iter())
+                .with_min_len(CHUNK)
+                .for_each(|((changed, f), &t)| {
+                    *changed = t.iter().any(|&c| mark[c as usize]);
+                    if *changed {
+                        *f = face_normal(t, positions);
+                    }
+                });
+            let (links_ref, faces_ref) = (&*links, &*faces);
+            out.positions
+                .par_iter_mut()
+                .zip(out.normals.par_iter_mut())
+                .zip(topology.weld.par_iter())
+                .with_min_len(CHUNK)
+                .for_each(|((p, n), &w)| {
+                    *p = positions[w as usize];
+                    let around = links_ref
+                        .triangles_of(w)
+                        .iter()
+                        .any(|&t| links_ref.tri_mark[t as usize]);
+                    if around {
+                        *n = vertex_normal(w, links_ref, faces_ref);
+                    }
+                });
+            links.tri_mark.par_iter_mut().for_each(|c| *c = false);
+            for &v in &moved {
+                links.mark[v as usize] = false;
+            }
+            return true;
+        }
+        if faces.len() != triangles.len() {
             // Every normal: the face normals once, then each vertex's sum over its triangles
             // in ascending order (the same additions as `smooth_normals`), in parallel;
             // then scattered to the stored copies.
