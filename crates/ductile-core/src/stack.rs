@@ -309,6 +309,18 @@ pub fn for_each_at<T: Send>(
     });
 }
 
+/// `values[indices[k]] = src[k]` for every `k` (`src` as long as `indices`): a plain loop,
+/// or [`for_each_at`]'s parallel chunks from [`PARALLEL_COPY_THRESHOLD`] entries.
+pub fn scatter_at<T: Copy + Send + Sync>(values: &mut [T], indices: &[u32], src: &[T]) {
+    if indices.len() >= PARALLEL_COPY_THRESHOLD {
+        for_each_at(values, indices, |k, v| *v = src[k]);
+    } else {
+        for (&i, &s) in indices.iter().zip(src) {
+            values[i as usize] = s;
+        }
+    }
+}
+
 /// `values[i]` for every `i` of `indices`, gathered in parallel chunks above
 /// [`PARALLEL_COPY_THRESHOLD`] indices.
 #[must_use]

@@ -41,7 +41,7 @@ use glam::Vec3;
 use ductile_core::influence::Mask;
 use ductile_core::mesh::{Deformed, RestMesh, Topology};
 use ductile_core::stack::{
-    CHUNK, Layer, LayerBinding, PARALLEL_THRESHOLD, Stack, for_each_at, gather_at,
+    CHUNK, Layer, LayerBinding, PARALLEL_THRESHOLD, Stack, gather_at, scatter_at,
 };
 use ductile_core::tool::{Tool, ToolBind};
 use rayon::prelude::*;
@@ -719,9 +719,7 @@ impl MeshEvaluator {
         let rest = self.rest.clone();
         let k = k.min(self.stages.len());
         for stage in self.stages[k..].iter().rev() {
-            for_each_at(&mut self.positions, stage.indices(), |j, p| {
-                *p = stage.saved[j]
-            });
+            scatter_at(&mut self.positions, stage.indices(), &stage.saved);
         }
         let mut old: Vec<Option<Stage>> = self.stages.drain(k..).map(Some).collect();
         let mut next_old = 0;
@@ -741,9 +739,7 @@ impl MeshEvaluator {
             if let Some(mut stage) =
                 matched.take_if(|s| !self.dirty.intersects(s.resolved.domain()))
             {
-                for_each_at(&mut self.positions, stage.indices(), |j, p| {
-                    *p = stage.written[j];
-                });
+                scatter_at(&mut self.positions, stage.indices(), &stage.written);
                 stage.index = li;
                 self.stages.push(stage);
                 continue;
@@ -972,8 +968,7 @@ fn refresh(
     for &k in &at {
         stage.saved[k as usize] = positions[indices[k as usize] as usize];
     }
-    let written = &stage.written;
-    for_each_at(positions, indices, |k, p| *p = written[k]);
+    scatter_at(positions, indices, &stage.written);
     for &k in &at {
         positions[indices[k as usize] as usize] = stage.saved[k as usize];
     }
