@@ -19,6 +19,10 @@
 //! old ones at the same point of the stack (exact bitwise comparisons of `saved` and
 //! `written`; details in `docs/algorithms/evaluation.md`).
 //!
+//! A later FFSD layer that must be bound again but whose new bind has the same bits as the
+//! old one is *refreshed*: only its active vertices in `D` are deformed again, the others get
+//! their old output bits back.
+//!
 //! A layer reads the positions of its *domain*: the vertices of its area when it has one
 //! and its tool reads only the active vertices (FFSD, lattice, curve, axial and shape
 //! surface tools), every vertex otherwise (no area, or DOGME / Direct FFD constraints
