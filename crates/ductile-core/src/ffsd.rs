@@ -25,7 +25,10 @@
 use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Serialize};
 
+use rayon::prelude::*;
+
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
+use crate::stack::{CHUNK, PARALLEL_THRESHOLD};
 use crate::tool::{BindInput, Deformer, uniform_scale};
 
 /// How a control point pushes the surface.
@@ -287,6 +290,25 @@ impl FfsdBind {
         self.s_ref
     }
 
+    /// True when both binds hold bit-identical values (anchors, prepared points and
+    /// `S_ref`): [`FfsdTool::deform`] then gives the same bits with either, vertex by vertex.
+    #[must_use]
+    pub fn same_bits(&self, other: &Self) -> bool {
+        let v = |a: Vec3, b: Vec3| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits);
+        let f = |a: f32, b: f32| a.to_bits() == b.to_bits();
+        self.points.len() == other.points.len()
+            && f(self.s_ref, other.s_ref)
+            && self.points.iter().zip(&other.points).all(|(a, b)| {
+                a.anchor == b.anchor
+                    && v(a.centre, b.centre)
+                    && v(a.target, b.target)
+                    && f(a.gamma, b.gamma)
+                    && f(a.half_alpha, b.half_alpha)
+                    && f(a.inv_two_eps2, b.inv_two_eps2)
+                    && f(a.anchor_pow, b.anchor_pow)
+            })
+    }
+
     fn sum(&self, v: Vec3) -> Vec3 {
         self.points
             .iter()
@@ -309,12 +331,14 @@ impl Deformer for FfsdTool {
     }
 
     fn bind(&self, input: &BindInput<'_>) -> Result<FfsdBind> {
+        let centres: Vec<Vec3> = self.points.iter().map(ControlPoint::centre).collect();
+        let anchors = closest(input.positions, input.active, &centres);
         let points: Vec<PreparedPoint> = self
             .points
             .iter()
-            .map(|p| {
+            .zip(anchors)
+            .map(|(p, anchor)| {
                 let centre = p.centre();
-                let anchor = closest(input.positions, input.active, centre);
                 let v_min = input.positions[anchor as usize];
                 let target = match p.mode {
                     PointMode::Basic => p.position,
@@ -384,16 +408,37 @@ impl Deformer for FfsdTool {
     }
 }
 
-/// The active vertex closest to `x` (first one on ties).
-fn closest(positions: &[Vec3], active: &[u32], x: Vec3) -> u32 {
-    let mut best = (active[0], f32::INFINITY);
-    for &i in active {
-        let d = positions[i as usize].distance_squared(x);
-        if d < best.1 {
-            best = (i, d);
+/// For each of `xs`, the active vertex closest to it (the first one on ties). Long lists
+/// are searched in one parallel pass over chunks whose winners are combined in order with
+/// the same strict comparison, so the result is the serial one.
+fn closest(positions: &[Vec3], active: &[u32], xs: &[Vec3]) -> Vec<u32> {
+    let search = |chunk: &[u32]| -> Vec<(u32, f32)> {
+        xs.iter()
+            .map(|&x| {
+                let mut best = (chunk[0], f32::INFINITY);
+                for &i in chunk {
+                    let d = positions[i as usize].distance_squared(x);
+                    if d < best.1 {
+                        best = (i, d);
+                    }
+                }
+                best
+            })
+            .collect()
+    };
+    if active.len() < PARALLEL_THRESHOLD {
+        return search(active).into_iter().map(|b| b.0).collect();
+    }
+    let winners: Vec<Vec<(u32, f32)>> = active.par_chunks(CHUNK).map(search).collect();
+    let mut best = vec![(active[0], f32::INFINITY); xs.len()];
+    for chunk in winners {
+        for (b, w) in best.iter_mut().zip(chunk) {
+            if w.1 < b.1 {
+                *b = w;
+            }
         }
     }
-    best.0
+    best.into_iter().map(|b| b.0).collect()
 }
 
 /// A macro: a named, predefined set of control points with base parameters, driven by one
@@ -683,5 +728,25 @@ mod tests {
         for (p, q) in a.iter().zip(&b) {
             assert!((m.transform_point3(*p) - *q).length() < 1e-4, "{p} → {q}");
         }
+    }
+
+    #[test]
+    fn parallel_closest_keeps_the_first_of_equal_distances() {
+        let n = PARALLEL_THRESHOLD * 2 + 5;
+        // Points on a line; the two closest to x = 30_000.5 are at equal distance: the
+        // first (lower index) must win, also across a chunk boundary.
+        let positions: Vec<Vec3> = (0..n).map(|i| Vec3::new(i as f32, 0.0, 0.0)).collect();
+        let active: Vec<u32> = (0..n as u32).collect();
+        let x = Vec3::new(CHUNK as f32 * 7.0 - 0.5, 0.0, 0.0);
+        let far = Vec3::new(-1.0, 0.0, 0.0);
+        assert_eq!(
+            closest(&positions, &active, &[x, far]),
+            vec![CHUNK as u32 * 7 - 1, 0]
+        );
+        let x = Vec3::new(30_000.25, 1.0, 0.0);
+        assert_eq!(closest(&positions, &active, &[x]), vec![30_000]);
+        // The serial search over a short list agrees.
+        let short: Vec<u32> = (29_990..30_010).collect();
+        assert_eq!(closest(&positions, &short, &[x]), vec![30_000]);
     }
 }

@@ -11,9 +11,11 @@
 //! influence" speed-up); all others keep their input position bit for bit.
 
 use glam::{Affine3A, Vec3};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result, check_finite};
+use crate::stack::{CHUNK, PARALLEL_THRESHOLD};
 
 /// The shape of an influence volume in its own local frame (centred at the origin).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -228,6 +230,36 @@ impl Influence {
     /// The mask over `positions` (welded, the layer's input): every vertex with `w(v) > 0`.
     #[must_use]
     pub fn mask(&self, positions: &[Vec3]) -> Mask {
+        let n = positions.len();
+        if self.volumes.is_empty() {
+            // `g(v) = 1` everywhere: the mask is the area (or every vertex), weight 1.
+            let indices: Vec<u32> = match &self.area {
+                Some(area) => area.iter().copied().filter(|&i| (i as usize) < n).collect(),
+                None => (0..n as u32).collect(),
+            };
+            let weights = vec![1.0; indices.len()];
+            return Mask { indices, weights };
+        }
+        let candidates = self.area.as_ref().map_or(n, Vec::len);
+        if candidates >= PARALLEL_THRESHOLD {
+            // Weights in parallel (each vertex's arithmetic unchanged), then kept in order.
+            let weight = |i: u32| (i, self.volume_weight(positions[i as usize]));
+            let all: Vec<(u32, f32)> = match &self.area {
+                Some(area) => area
+                    .par_iter()
+                    .with_min_len(CHUNK)
+                    .filter(|&&i| (i as usize) < n)
+                    .map(|&i| weight(i))
+                    .collect(),
+                None => (0..n as u32)
+                    .into_par_iter()
+                    .with_min_len(CHUNK)
+                    .map(weight)
+                    .collect(),
+            };
+            let (indices, weights) = all.into_iter().filter(|&(_, w)| w > 0.0).unzip();
+            return Mask { indices, weights };
+        }
         let mut mask = Mask::default();
         let mut push = |i: u32| {
             let w = self.volume_weight(positions[i as usize]);
@@ -318,5 +350,49 @@ mod tests {
         );
         assert!(matches!(e, Err(CoreError::Degenerate { .. })));
         assert!(Shape::Sphere { radius: -1.0 }.validate("s").is_err());
+    }
+
+    #[test]
+    fn long_masks_match_the_per_vertex_weights() {
+        let n = PARALLEL_THRESHOLD + 1000;
+        let positions: Vec<Vec3> = (0..n)
+            .map(|i| Vec3::new((i % 200) as f32 * 0.01, (i / 200) as f32 * 0.01, 0.0))
+            .collect();
+        let vol = Volume::new(
+            Shape::Sphere { radius: 0.5 },
+            Affine3A::from_translation(Vec3::new(1.0, 0.4, 0.0)),
+            "v",
+        )
+        .unwrap();
+        for (area, volumes) in [
+            (None, vec![vol.clone()]),
+            (
+                Some((0..n as u32).step_by(1).collect::<Vec<_>>()),
+                vec![vol.clone()],
+            ),
+            (Some((0..n as u32 + 5).step_by(2).collect()), vec![]),
+            (None, vec![]),
+        ] {
+            let inf = Influence {
+                volumes,
+                area,
+                falloff: Falloff::Smooth,
+                inner: 0.2,
+                invert: false,
+            };
+            let m = inf.mask(&positions);
+            let candidates: Vec<u32> = match &inf.area {
+                Some(a) => a.iter().copied().filter(|&i| (i as usize) < n).collect(),
+                None => (0..n as u32).collect(),
+            };
+            let expected: Vec<(u32, f32)> = candidates
+                .into_iter()
+                .map(|i| (i, inf.volume_weight(positions[i as usize])))
+                .filter(|&(_, w)| w > 0.0)
+                .collect();
+            assert!(!expected.is_empty());
+            let got: Vec<(u32, f32)> = m.indices.into_iter().zip(m.weights).collect();
+            assert_eq!(got, expected);
+        }
     }
 }

@@ -68,6 +68,129 @@ pub fn subdivided(mesh: &Mesh, levels: u32) -> Mesh {
     out
 }
 
+/// Uniform subdivision of every triangle into `n²`: every stored edge is split into `n`
+/// equal segments and every triangle `(a, b, c)` into the `n²` triangles of its barycentric
+/// grid — grid point `(i, j)` (`i` steps from `a` towards `b`, `j` towards `c`, `i + j ≤ n`)
+/// sits at `(p_a · (n − i − j) + p_b · i + p_c · j) / n`, and the triangles
+/// `((i, j), (i + 1, j), (i, j + 1))` and `((i + 1, j), (i + 1, j + 1), (i, j + 1))` keep the
+/// parent's orientation. UVs are interpolated the same way; normals are the normalised
+/// interpolation (the first corner's normal when it is zero).
+///
+/// Stored vertices keep their indices; then come the `n − 1` points of each stored edge (in
+/// order of first use) and the interior points of each triangle. A point on an edge `(u, v)`
+/// is computed from the two end positions taken in a canonical order (by their bits, `±0`
+/// alike, as [`crate::mesh::Topology::weld`] compares them), `(p_lo · (n − s) + p_hi · s) / n`
+/// with `s` steps from `lo`: the seam copies of an edge get bit-identical points, so welding
+/// still joins them. A closed mesh with `V` vertices, `E` edges and `F` triangles becomes one
+/// with `V + (n − 1)·E + (n − 1)(n − 2)/2 · F` vertices and `n²·F` triangles.
+/// `subdivided_n(mesh, 2)` has the vertex and triangle counts of `subdivided(mesh, 1)`;
+/// `n = 0` or `1` returns a copy. Triangles with an index out of range are dropped.
+#[must_use]
+pub fn subdivided_n(mesh: &Mesh, n: u32) -> Mesh {
+    if n <= 1 {
+        return mesh.clone();
+    }
+    let count = mesh.positions.len();
+    let nf = n as f32;
+    let mut out = Mesh {
+        positions: mesh.positions.clone(),
+        normals: mesh.normals.clone(),
+        uvs: mesh.uvs.clone(),
+        indices: Vec::with_capacity(mesh.indices.len() * (n * n) as usize),
+    };
+    // One weighted point: `Σ p_k · w_k / n` over the (index, weight) pairs, in the order
+    // given; normals and UVs interpolated over the same pairs.
+    let push = |out: &mut Mesh, corners: &[(usize, f32)]| -> u32 {
+        let index = out.positions.len() as u32;
+        let mix3 = |v: &[Vec3]| {
+            corners
+                .iter()
+                .fold(Vec3::ZERO, |acc, &(i, w)| acc + v[i] * w)
+        };
+        out.positions.push(mix3(&mesh.positions) / nf);
+        if let (Some(dst), Some(src)) = (&mut out.normals, &mesh.normals) {
+            dst.push(mix3(src).try_normalize().unwrap_or(src[corners[0].0]));
+        }
+        if let (Some(dst), Some(src)) = (&mut out.uvs, &mesh.uvs) {
+            let uv = corners
+                .iter()
+                .fold(glam::Vec2::ZERO, |acc, &(i, w)| acc + src[i] * w);
+            dst.push(uv / nf);
+        }
+        index
+    };
+    let key = |i: usize| {
+        let p = mesh.positions[i];
+        [p.x, p.y, p.z].map(|c| if c == 0.0 { 0 } else { c.to_bits() })
+    };
+    // Stored edge (min, max) → index of its first new point (the one next to `min`).
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::with_capacity(mesh.indices.len());
+    let mut edge_point = |out: &mut Mesh, u: u32, v: u32, s: u32| -> u32 {
+        let (m, big) = (u.min(v), u.max(v));
+        let base = *edges.entry((m, big)).or_insert_with(|| {
+            let (m, big) = (m as usize, big as usize);
+            let (lo, hi, flip) = if key(m) <= key(big) {
+                (m, big, false)
+            } else {
+                (big, m, true)
+            };
+            let first = out.positions.len() as u32;
+            for k in 1..n {
+                let s_lo = if flip { n - k } else { k };
+                push(out, &[(lo, (n - s_lo) as f32), (hi, s_lo as f32)]);
+            }
+            first
+        });
+        // Steps from `m`.
+        let k = if u == m { s } else { n - s };
+        base + k - 1
+    };
+    let mut grid_index = vec![0_u32; ((n + 1) * (n + 2) / 2) as usize];
+    let at = |i: u32, j: u32| (j * (n + 1) - j * j.saturating_sub(1) / 2 + i) as usize;
+    for t in mesh.indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]];
+        if [a, b, c].iter().any(|&i| i as usize >= count) {
+            continue;
+        }
+        for j in 0..=n {
+            for i in 0..=n - j {
+                let index = match (i, j) {
+                    (0, 0) => a,
+                    (i, 0) if i == n => b,
+                    (0, j) if j == n => c,
+                    (i, 0) => edge_point(&mut out, a, b, i),
+                    (i, j) if i + j == n => edge_point(&mut out, b, c, j),
+                    (0, j) => edge_point(&mut out, a, c, j),
+                    (i, j) => push(
+                        &mut out,
+                        &[
+                            (a as usize, (n - i - j) as f32),
+                            (b as usize, i as f32),
+                            (c as usize, j as f32),
+                        ],
+                    ),
+                };
+                grid_index[at(i, j)] = index;
+            }
+        }
+        for j in 0..n {
+            for i in 0..n - j {
+                let (p, q, r) = (
+                    grid_index[at(i, j)],
+                    grid_index[at(i + 1, j)],
+                    grid_index[at(i, j + 1)],
+                );
+                out.indices.extend([p, q, r]);
+                if i + j + 2 <= n {
+                    let d = grid_index[at(i + 1, j + 1)];
+                    out.indices.extend([q, d, r]);
+                }
+            }
+        }
+    }
+    out
+}
+
 /// One level of [`subdivided`].
 fn subdivide_once(mesh: &Mesh) -> Mesh {
     let n = mesh.positions.len();
@@ -193,6 +316,133 @@ mod tests {
         for p in &s2.positions {
             assert_eq!((p.x * 4.0).fract(), 0.0);
             assert_eq!((p.y * 4.0).fract(), 0.0);
+        }
+    }
+
+    /// An octahedron with vertex 0 stored twice (a seam: the copy, 6, is used by the last
+    /// two triangles, written in another rotation so their edges are walked the other way).
+    fn seam_octahedron() -> Mesh {
+        let positions = vec![
+            Vec3::X,
+            Vec3::Y,
+            -Vec3::X,
+            -Vec3::Y,
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+        ];
+        let indices = vec![
+            0, 1, 4, 1, 2, 4, 2, 3, 4, 4, 3, 6, // upper half; the last starts at the top
+            1, 0, 5, 2, 1, 5, 3, 2, 5, 5, 6, 3, // lower half
+        ];
+        Mesh {
+            positions,
+            normals: None,
+            uvs: None,
+            indices,
+        }
+    }
+
+    #[test]
+    fn n_split_counts_follow_euler() {
+        let m = seam_octahedron();
+        // Welded: V = 6, E = 12, F = 8 (closed, χ = 2); stored: 7 vertices, 14 stored edges
+        // (the two edges at the seam copy are stored twice).
+        for n in 2..=5_u32 {
+            let s = subdivided_n(&m, n);
+            assert!(s.validate("s").is_ok());
+            assert_eq!(s.triangle_count(), 8 * (n * n) as usize);
+            let interior = ((n - 1) * (n - 2) / 2) as usize;
+            assert_eq!(s.positions.len(), 7 + 14 * (n as usize - 1) + 8 * interior);
+            let topo = crate::mesh::Topology::weld(&s);
+            let v = topo.vertex_count();
+            assert_eq!(v, 6 + 12 * (n as usize - 1) + 8 * interior, "n = {n}");
+            // Euler on the welded result: V − E + F = 2, with E = 3F / 2 on a closed mesh.
+            let f = topo.triangles.len();
+            assert_eq!(f, 8 * (n * n) as usize);
+            assert_eq!(v as i64 - (3 * f / 2) as i64 + f as i64, 2);
+            let adjacency = topo.adjacency();
+            let edges: usize = adjacency.iter().map(Vec::len).sum::<usize>() / 2;
+            assert_eq!(edges, 3 * f / 2);
+        }
+        assert_eq!(subdivided_n(&m, 1), m);
+        // n = 2 has the counts of one midpoint level.
+        let (a, b) = (subdivided_n(&m, 2), subdivided(&m, 1));
+        assert_eq!(
+            (a.positions.len(), a.triangle_count()),
+            (b.positions.len(), b.triangle_count())
+        );
+    }
+
+    #[test]
+    fn n_split_points_lie_on_their_triangles_and_seams_weld() {
+        let m = seam_octahedron();
+        let s = subdivided_n(&m, 5);
+        // Every face of the octahedron lies on |x| + |y| + |z| = 1.
+        for p in &s.positions {
+            assert!((p.abs().element_sum() - 1.0).abs() < 1e-6, "{p}");
+        }
+        // Each small triangle lies on its parent face (all coordinates' signs agree) and
+        // keeps its orientation (outward normal).
+        for t in s.indices.chunks_exact(3) {
+            let [a, b, c] = [0, 1, 2].map(|k| s.positions[t[k] as usize]);
+            let normal = (b - a).cross(c - a);
+            assert!(normal.dot(a + b + c) > 0.0);
+        }
+        // The seam copy's edges got bit-identical points: the weld joins them, and every
+        // welded position appears once.
+        let topo = crate::mesh::Topology::weld(&s);
+        let mut welded: Vec<[u32; 3]> = topo
+            .gather(&s.positions)
+            .iter()
+            .map(|p| [p.x, p.y, p.z].map(|c| if c == 0.0 { 0 } else { c.to_bits() }))
+            .collect();
+        welded.sort_unstable();
+        welded.dedup();
+        assert_eq!(welded.len(), topo.vertex_count());
+        let stored_copies = s.positions.len() - topo.vertex_count();
+        // Vertex 0 and its copy, plus the 4 points of each of the two stored-twice edges.
+        assert_eq!(stored_copies, 1 + 2 * 4);
+    }
+
+    #[test]
+    fn n_split_of_one_triangle_is_the_barycentric_lattice() {
+        let n = 5_u32;
+        let k = n as f32;
+        let m = Mesh {
+            positions: vec![Vec3::ZERO, Vec3::new(k, 0.0, 0.0), Vec3::new(0.0, k, 0.0)],
+            normals: Some(vec![Vec3::Z; 3]),
+            uvs: Some(vec![Vec2::ZERO, Vec2::X, Vec2::Y]),
+            indices: vec![0, 1, 2],
+        };
+        let s = subdivided_n(&m, n);
+        assert_eq!(s.positions.len(), 21);
+        assert_eq!(s.triangle_count(), 25);
+        let mut lattice: Vec<(i32, i32)> = s
+            .positions
+            .iter()
+            .map(|p| {
+                assert_eq!(p.z, 0.0);
+                assert_eq!(p.x.fract(), 0.0);
+                assert_eq!(p.y.fract(), 0.0);
+                (p.x as i32, p.y as i32)
+            })
+            .collect();
+        lattice.sort_unstable();
+        let mut expected: Vec<(i32, i32)> = (0..=5)
+            .flat_map(|i| (0..=5 - i).map(move |j| (i, j)))
+            .collect();
+        expected.sort_unstable();
+        assert_eq!(lattice, expected);
+        // UVs follow positions (u = x / 5, v = y / 5); normals stay +Z.
+        for (p, uv) in s.positions.iter().zip(s.uvs.as_ref().unwrap()) {
+            assert!((uv.x - p.x / k).abs() < 1e-6 && (uv.y - p.y / k).abs() < 1e-6);
+        }
+        assert!(s.normals.as_ref().unwrap().iter().all(|&v| v == Vec3::Z));
+        // Every small triangle has area 1/2 and is counter-clockwise like the parent.
+        for t in s.indices.chunks_exact(3) {
+            let [a, b, c] = [0, 1, 2].map(|q| s.positions[t[q] as usize]);
+            assert_eq!((b - a).cross(c - a), Vec3::new(0.0, 0.0, 1.0));
         }
     }
 }

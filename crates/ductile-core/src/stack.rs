@@ -20,10 +20,14 @@ use crate::mesh::{Deformed, RestMesh, Topology};
 use crate::refinement::{EdgePoint, RefinedMesh, WholeDeform};
 use crate::tool::{BindInput, Tool, ToolBind};
 
-/// Above this many active vertices a layer deforms in parallel chunks.
-const PARALLEL_THRESHOLD: usize = 16_384;
-/// Chunk size for parallel deformation.
-const CHUNK: usize = 4_096;
+/// Above this many active vertices a layer deforms (and blends, masks, binds) in parallel
+/// chunks.
+pub const PARALLEL_THRESHOLD: usize = 16_384;
+/// Chunk size for parallel per-vertex work.
+pub const CHUNK: usize = 4_096;
+/// Above this many entries, plain copies (scatter, gather) run in parallel chunks; below
+/// it, waking the pool costs more than the copy (and much more on a loaded machine).
+pub const PARALLEL_COPY_THRESHOLD: usize = 1 << 17;
 
 /// One resolved layer: a tool in mesh space, its influence, weight and enabled flag.
 #[derive(Debug, Clone, PartialEq)]
@@ -159,6 +163,42 @@ impl LayerBinding {
         Ok(Some(refinement.splits))
     }
 
+    /// Applies the layer, with this binding, to the active vertices at positions `at` of
+    /// the mask only (`at` ascending, each `< mask.len()`): each gets exactly the bits
+    /// [`LayerBinding::apply`] would give it, since a per-vertex tool's output for a vertex
+    /// depends only on the bind and that vertex's input. The other vertices are not touched.
+    /// Returns `Ok(false)`, touching nothing, for a tool that works on the layer as a whole
+    /// ([`Tool::deform_whole`]); an error, touching nothing, when an output is not finite.
+    pub fn apply_at(&self, layer: &Layer, positions: &mut [Vec3], at: &[u32]) -> Result<bool> {
+        let Some(bind) = &self.bind else {
+            return Ok(true);
+        };
+        if at.is_empty() {
+            return Ok(true);
+        }
+        if layer.tool.is_whole_layer() {
+            return Ok(false);
+        }
+        let active: Vec<u32> = at.iter().map(|&k| self.mask.indices[k as usize]).collect();
+        let mut out = vec![Vec3::ZERO; active.len()];
+        deform_chunks(&layer.tool, bind, positions, &active, &mut out);
+        if let Some(k) = out.iter().position(|p| !p.is_finite()) {
+            return Err(CoreError::Degenerate {
+                what: format!("layer '{}'", layer.name),
+                problem: format!(
+                    "the tool produced a non-finite position for vertex {}",
+                    active[k]
+                ),
+            });
+        }
+        for ((&k, &i), &d) in at.iter().zip(&active).zip(&out) {
+            let w = self.mask.weights[k as usize] * layer.weight;
+            let p = &mut positions[i as usize];
+            *p = blend_one(*p, d, w);
+        }
+        Ok(true)
+    }
+
     /// The tool's output for every active vertex: whole-layer tools in one call, the others
     /// in (parallel) chunks; checked to be finite.
     fn deform(
@@ -173,13 +213,7 @@ impl LayerBinding {
             Some(r) => r?,
             None => {
                 let mut out = vec![Vec3::ZERO; active.len()];
-                if active.len() >= PARALLEL_THRESHOLD {
-                    out.par_chunks_mut(CHUNK)
-                        .zip(active.par_chunks(CHUNK))
-                        .for_each(|(o, a)| layer.tool.deform(bind, positions, a, o));
-                } else {
-                    layer.tool.deform(bind, positions, active, &mut out);
-                }
+                deform_chunks(&layer.tool, bind, positions, active, &mut out);
                 WholeDeform {
                     out,
                     refinement: None,
@@ -211,12 +245,101 @@ impl LayerBinding {
     /// `p'ᵢ = pᵢ + weight · wᵢ · (D(pᵢ) − pᵢ)` over the active vertices, exactly `D(pᵢ)` when
     /// `weight · wᵢ = 1`.
     fn blend(&self, layer: &Layer, out: &[Vec3], positions: &mut [Vec3]) {
-        for ((&i, &w), &d) in self.mask.indices.iter().zip(&self.mask.weights).zip(out) {
-            let w = w * layer.weight;
-            let p = &mut positions[i as usize];
-            *p = if w == 1.0 { d } else { *p + (d - *p) * w };
+        let weights = &self.mask.weights;
+        for_each_at(positions, &self.mask.indices, |k, p| {
+            *p = blend_one(*p, out[k], weights[k] * layer.weight);
+        });
+    }
+}
+
+/// A per-vertex tool's output for `active`, in parallel chunks above
+/// [`PARALLEL_THRESHOLD`] vertices.
+fn deform_chunks(
+    tool: &Tool,
+    bind: &ToolBind,
+    positions: &[Vec3],
+    active: &[u32],
+    out: &mut [Vec3],
+) {
+    if active.len() >= PARALLEL_THRESHOLD {
+        out.par_chunks_mut(CHUNK)
+            .zip(active.par_chunks(CHUNK))
+            .for_each(|(o, a)| tool.deform(bind, positions, a, o));
+    } else {
+        tool.deform(bind, positions, active, out);
+    }
+}
+
+/// Calls `f(k, &mut values[indices[k]])` for every `k`. When `indices` has at least
+/// [`PARALLEL_COPY_THRESHOLD`] entries and is strictly ascending (as a [`Mask`]'s indices are), the
+/// calls run in parallel chunks of [`CHUNK`] entries, each owning a disjoint range of
+/// `values`; otherwise in order. Each element sees the same single call either way, so a
+/// per-element `f` gives the same bits. Indices must be in range (panics otherwise, like
+/// indexing).
+pub fn for_each_at<T: Send>(
+    values: &mut [T],
+    indices: &[u32],
+    f: impl Fn(usize, &mut T) + Sync + Send,
+) {
+    let ascending = indices.len() >= PARALLEL_COPY_THRESHOLD
+        && indices.windows(2).all(|w| w[0] < w[1])
+        && indices.last().is_some_and(|&i| (i as usize) < values.len());
+    if !ascending {
+        for (k, &i) in indices.iter().enumerate() {
+            f(k, &mut values[i as usize]);
+        }
+        return;
+    }
+    let mut parts = Vec::with_capacity(indices.len().div_ceil(CHUNK));
+    let mut rest = values;
+    let mut base = 0_usize;
+    for (c, chunk) in indices.chunks(CHUNK).enumerate() {
+        let end = indices
+            .get((c + 1) * CHUNK)
+            .map_or(base + rest.len(), |&next| next as usize);
+        let (head, tail) = rest.split_at_mut(end - base);
+        parts.push((c * CHUNK, chunk, head, base));
+        rest = tail;
+        base = end;
+    }
+    parts.into_par_iter().for_each(|(k0, chunk, slice, base)| {
+        for (j, &i) in chunk.iter().enumerate() {
+            f(k0 + j, &mut slice[i as usize - base]);
+        }
+    });
+}
+
+/// `values[indices[k]] = src[k]` for every `k` (`src` as long as `indices`): a plain loop,
+/// or [`for_each_at`]'s parallel chunks from [`PARALLEL_COPY_THRESHOLD`] entries.
+pub fn scatter_at<T: Copy + Send + Sync>(values: &mut [T], indices: &[u32], src: &[T]) {
+    if indices.len() >= PARALLEL_COPY_THRESHOLD {
+        for_each_at(values, indices, |k, v| *v = src[k]);
+    } else {
+        for (&i, &s) in indices.iter().zip(src) {
+            values[i as usize] = s;
         }
     }
+}
+
+/// `values[i]` for every `i` of `indices`, gathered in parallel chunks above
+/// [`PARALLEL_COPY_THRESHOLD`] indices.
+#[must_use]
+pub fn gather_at<T: Copy + Send + Sync>(values: &[T], indices: &[u32]) -> Vec<T> {
+    if indices.len() >= PARALLEL_COPY_THRESHOLD {
+        indices
+            .par_iter()
+            .with_min_len(CHUNK)
+            .map(|&i| values[i as usize])
+            .collect()
+    } else {
+        indices.iter().map(|&i| values[i as usize]).collect()
+    }
+}
+
+/// The blend of one vertex: `p + w · (d − p)`, exactly `d` when `w = 1`.
+#[inline]
+fn blend_one(p: Vec3, d: Vec3, w: f32) -> Vec3 {
+    if w == 1.0 { d } else { p + (d - p) * w }
 }
 
 /// A stack's result on welded vertices.
@@ -277,5 +400,45 @@ impl Stack {
             None => rest.output(&ev.positions),
             Some(r) => rest.output_refined(&ev.positions, r),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A long, strictly ascending index list with gaps (parallel path) and its values.
+    fn sparse(n: u32) -> (Vec<Vec3>, Vec<u32>) {
+        let values: Vec<Vec3> = (0..3 * n).map(|i| Vec3::splat(i as f32 * 0.5)).collect();
+        let indices: Vec<u32> = (0..n).map(|k| 3 * k + k % 3).collect();
+        (values, indices)
+    }
+
+    #[test]
+    fn parallel_scatter_and_gather_match_the_serial_loops() {
+        let n = (PARALLEL_COPY_THRESHOLD + CHUNK + 17) as u32;
+        let (values, indices) = sparse(n);
+        let mut serial = values.clone();
+        for (k, &i) in indices.iter().enumerate() {
+            serial[i as usize] = serial[i as usize] * 3.0 + Vec3::splat(k as f32);
+        }
+        let mut parallel = values.clone();
+        for_each_at(&mut parallel, &indices, |k, p| {
+            *p = *p * 3.0 + Vec3::splat(k as f32);
+        });
+        assert_eq!(parallel, serial);
+        let gathered = gather_at(&values, &indices);
+        assert_eq!(gathered.len(), indices.len());
+        assert!(
+            indices
+                .iter()
+                .zip(&gathered)
+                .all(|(&i, &g)| values[i as usize] == g)
+        );
+        // Not ascending: done in order, so a repeated index sees both calls.
+        let mut repeated = vec![0_u32; 2];
+        let twice: Vec<u32> = (0..PARALLEL_COPY_THRESHOLD as u32).map(|k| k % 2).collect();
+        for_each_at(&mut repeated, &twice, |_, c| *c += 1);
+        assert_eq!(repeated, vec![PARALLEL_COPY_THRESHOLD as u32 / 2; 2]);
     }
 }

@@ -201,6 +201,13 @@ impl Tool {
         }
     }
 
+    /// True for the tools [`Tool::deform_whole`] evaluates as a whole (their output for a
+    /// vertex may depend on other vertices); false for per-vertex tools.
+    #[must_use]
+    pub fn is_whole_layer(&self) -> bool {
+        matches!(self, Tool::Sketch(_))
+    }
+
     /// See [`Deformer::transformed`].
     #[must_use]
     pub fn transformed(&self, m: &Affine3A) -> Self {

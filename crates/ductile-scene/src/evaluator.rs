@@ -19,6 +19,10 @@
 //! old ones at the same point of the stack (exact bitwise comparisons of `saved` and
 //! `written`; details in `docs/algorithms/evaluation.md`).
 //!
+//! A later FFSD layer that must be bound again but whose new bind has the same bits as the
+//! old one is *refreshed*: only its active vertices in `D` are deformed again, the others get
+//! their old output bits back.
+//!
 //! A layer reads the positions of its *domain*: the vertices of its area when it has one
 //! and its tool reads only the active vertices (FFSD, lattice, curve, axial and shape
 //! surface tools), every vertex otherwise (no area, or DOGME / Direct FFD constraints
@@ -40,8 +44,11 @@ use glam::Vec3;
 
 use ductile_core::influence::Mask;
 use ductile_core::mesh::{Deformed, RestMesh, Topology};
-use ductile_core::stack::{Layer, LayerBinding, Stack};
-use ductile_core::tool::Tool;
+use ductile_core::stack::{
+    CHUNK, Layer, LayerBinding, PARALLEL_THRESHOLD, Stack, gather_at, scatter_at,
+};
+use ductile_core::tool::{Tool, ToolBind};
+use rayon::prelude::*;
 
 use crate::document::{Area, Document};
 use crate::error::Result;
@@ -193,6 +200,31 @@ impl Dirty {
         }
     }
 
+    /// The positions `k` (ascending) of the members of `D` in the sorted list `indices`.
+    fn positions_in(&self, indices: &[u32]) -> Vec<u32> {
+        if self.count == 0 {
+            return Vec::new();
+        }
+        if self.list.len() * 16 < indices.len() {
+            let mut at: Vec<u32> = self
+                .list
+                .iter()
+                .filter(|&&v| self.contains(v))
+                .filter_map(|v| indices.binary_search(v).ok().map(|k| k as u32))
+                .collect();
+            at.sort_unstable();
+            at.dedup();
+            at
+        } else {
+            indices
+                .iter()
+                .enumerate()
+                .filter(|&(_, &v)| self.contains(v))
+                .map(|(k, _)| k as u32)
+                .collect()
+        }
+    }
+
     /// The members, once each, and an empty set.
     fn drain(&mut self) -> Vec<u32> {
         let mut out = Vec::with_capacity(self.count);
@@ -223,6 +255,19 @@ impl Dirty {
     fn advance(&mut self, stage: &Stage) {
         for ((&v, &a), &b) in stage.indices().iter().zip(&stage.saved).zip(&stage.written) {
             if !self.contains(v) && !same_bits(a, b) {
+                self.insert(v);
+            }
+        }
+    }
+
+    /// [`Dirty::advance_old`], [`Dirty::advance_new`] and [`Dirty::settle_common`] in one
+    /// pass, for two stages with the same active vertices: every vertex they touch is
+    /// settled, so only the last rule's outcome remains.
+    fn settle_same(&mut self, old: &Stage, new: &Stage) {
+        for ((&v, &a), &b) in old.indices().iter().zip(&old.written).zip(&new.written) {
+            if same_bits(a, b) {
+                self.remove(v);
+            } else {
                 self.insert(v);
             }
         }
@@ -268,6 +313,7 @@ struct Links {
     copy_offsets: Vec<u32>,
     copies: Vec<u32>,
     mark: Vec<bool>,
+    tri_mark: Vec<bool>,
 }
 
 impl Links {
@@ -295,6 +341,7 @@ impl Links {
             copy_offsets,
             copies,
             mark: vec![false; n],
+            tri_mark: vec![false; topology.triangles.len()],
         }
     }
 
@@ -336,18 +383,23 @@ fn rows(n: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> (Vec<u32>,
 /// [`smooth_normals`](ductile_core::normals::smooth_normals) computes it: the face normals
 /// `(b − a) × (c − a)` of its triangles summed in triangle order from zero, normalised
 /// (`Vec3::Z` when the sum is zero).
-fn vertex_normal(v: u32, links: &Links, triangles: &[[u32; 3]], positions: &[Vec3]) -> Vec3 {
+fn vertex_normal(v: u32, links: &Links, faces: &[Vec3]) -> Vec3 {
     let mut acc = Vec3::ZERO;
     for &t in links.triangles_of(v) {
-        let [a, b, c] = triangles[t as usize];
-        let (pa, pb, pc) = (
-            positions[a as usize],
-            positions[b as usize],
-            positions[c as usize],
-        );
-        acc += (pb - pa).cross(pc - pa);
+        acc += faces[t as usize];
     }
     acc.try_normalize().unwrap_or(Vec3::Z)
+}
+
+/// The face normal `(b − a) × (c − a)` of a triangle, as `smooth_normals` computes it.
+#[inline]
+fn face_normal([a, b, c]: [u32; 3], positions: &[Vec3]) -> Vec3 {
+    let (pa, pb, pc) = (
+        positions[a as usize],
+        positions[b as usize],
+        positions[c as usize],
+    );
+    (pb - pa).cross(pc - pa)
 }
 
 /// Caches the evaluation of one mesh node's stack and brings it up to date with a
@@ -371,7 +423,14 @@ pub struct MeshEvaluator {
     positions: Vec<Vec3>,
     output: Option<Deformed>,
     links: Option<Links>,
+    /// Face normals `(b − a) × (c − a)` of the output's welded triangles; empty when not
+    /// known (they are rebuilt with the next full output).
+    faces: Vec<Vec3>,
+    /// Scratch space for the welded normals of a full output rebuild.
+    normals: Vec<Vec3>,
     dirty: Dirty,
+    /// How many stages were refreshed (see [`refresh`]) since the evaluator was made.
+    refreshed: usize,
 }
 
 impl MeshEvaluator {
@@ -391,7 +450,10 @@ impl MeshEvaluator {
             positions: Vec::new(),
             output: None,
             links: None,
+            faces: Vec::new(),
+            normals: Vec::new(),
             dirty: Dirty::default(),
+            refreshed: 0,
         }
     }
 
@@ -599,6 +661,7 @@ impl MeshEvaluator {
                 self.dirty.drain();
                 let new = self.rest.output(&self.positions);
                 let changed = self.output.as_ref() != Some(&new);
+                self.faces.clear();
                 self.output = Some(new);
                 Ok((n, changed))
             }
@@ -622,6 +685,7 @@ impl MeshEvaluator {
             Mode::Empty
         };
         let changed = self.output.as_ref() != Some(&new);
+        self.faces.clear();
         self.output = Some(new);
         Ok((chain.len(), changed))
     }
@@ -659,9 +723,7 @@ impl MeshEvaluator {
         let rest = self.rest.clone();
         let k = k.min(self.stages.len());
         for stage in self.stages[k..].iter().rev() {
-            for (&i, &a) in stage.indices().iter().zip(&stage.saved) {
-                self.positions[i as usize] = a;
-            }
+            scatter_at(&mut self.positions, stage.indices(), &stage.saved);
         }
         let mut old: Vec<Option<Stage>> = self.stages.drain(k..).map(Some).collect();
         let mut next_old = 0;
@@ -681,14 +743,20 @@ impl MeshEvaluator {
             if let Some(mut stage) =
                 matched.take_if(|s| !self.dirty.intersects(s.resolved.domain()))
             {
-                for (&i, &b) in stage.indices().iter().zip(&stage.written) {
-                    self.positions[i as usize] = b;
-                }
+                scatter_at(&mut self.positions, stage.indices(), &stage.written);
                 stage.index = li;
                 self.stages.push(stage);
                 continue;
             }
             let binding = LayerBinding::bind(&r.full(), &self.positions, rest.topology())?;
+            if let Some(mut stage) = matched.take_if(|o| same_binding(&o.binding, &binding)) {
+                refresh(&mut self.positions, &mut self.dirty, &mut stage, &r.layer)?;
+                evaluated += 1;
+                self.refreshed += 1;
+                stage.index = li;
+                self.stages.push(stage);
+                continue;
+            }
             let saved = gather(&self.positions, &binding.mask.indices);
             if binding
                 .apply_refining(&r.layer, &mut self.positions)?
@@ -705,12 +773,14 @@ impl MeshEvaluator {
                 written,
             };
             evaluated += 1;
-            if let Some(o) = &matched {
-                self.dirty.advance_old(o);
-            }
-            self.dirty.advance_new(&stage);
-            if let Some(o) = &matched {
-                self.dirty.settle_common(o, &stage);
+            match &matched {
+                Some(o) if o.indices() == stage.indices() => self.dirty.settle_same(o, &stage),
+                Some(o) => {
+                    self.dirty.advance_old(o);
+                    self.dirty.advance_new(&stage);
+                    self.dirty.settle_common(o, &stage);
+                }
+                None => self.dirty.advance_new(&stage),
             }
             self.stages.push(stage);
         }
@@ -730,6 +800,7 @@ impl MeshEvaluator {
             .as_mut()
             .filter(|o| o.refined.is_none() && o.positions.len() == topology.stored_count())
         else {
+            self.faces.clear();
             self.output = Some(rest.output(&self.positions));
             return true;
         };
@@ -744,35 +815,177 @@ impl MeshEvaluator {
         if moved.is_empty() {
             return false;
         }
-        if moved.len() * OUTPUT_FULL_DIVISOR > self.positions.len() {
-            *out = rest.output(&self.positions);
-            return true;
-        }
         let links = self.links.get_or_insert_with(|| Links::new(topology));
         let triangles = &topology.triangles;
-        let mut around = Vec::new();
+        let positions = &self.positions;
+        let faces = &mut self.faces;
+        if faces.len() == triangles.len() && moved.len() * OUTPUT_FULL_DIVISOR > positions.len() {
+            // Many moved vertices: sweeps in order (and in parallel) instead of following
+            // each moved vertex. A triangle with a moved corner gets a new face normal; a
+            // stored vertex whose welded vertex has such a triangle gets a new normal.
+            for &v in &moved {
+                links.mark[v as usize] = true;
+            }
+            let mark = &links.mark;
+            links
+                .tri_mark
+                .par_iter_mut()
+                .zip(faces.par_iter_mut())
+                .zip(triangles.par_iter())
+                .with_min_len(CHUNK)
+                .for_each(|((changed, f), &t)| {
+                    *changed = t.iter().any(|&c| mark[c as usize]);
+                    if *changed {
+                        *f = face_normal(t, positions);
+                    }
+                });
+            let (links_ref, faces_ref) = (&*links, &*faces);
+            out.positions
+                .par_iter_mut()
+                .zip(out.normals.par_iter_mut())
+                .zip(topology.weld.par_iter())
+                .with_min_len(CHUNK)
+                .for_each(|((p, n), &w)| {
+                    *p = positions[w as usize];
+                    let around = links_ref
+                        .triangles_of(w)
+                        .iter()
+                        .any(|&t| links_ref.tri_mark[t as usize]);
+                    if around {
+                        *n = vertex_normal(w, links_ref, faces_ref);
+                    }
+                });
+            links.tri_mark.par_iter_mut().for_each(|c| *c = false);
+            for &v in &moved {
+                links.mark[v as usize] = false;
+            }
+            return true;
+        }
+        if faces.len() != triangles.len() {
+            // Every normal: the face normals once, then each vertex's sum over its triangles
+            // in ascending order (the same additions as `smooth_normals`), in parallel;
+            // then scattered to the stored copies.
+            // (Both buffers are kept between updates: fresh ones of this size would cost
+            // a page fault every 4 KiB.)
+            faces.resize(triangles.len(), Vec3::ZERO);
+            faces
+                .par_iter_mut()
+                .zip(triangles.par_iter())
+                .with_min_len(CHUNK)
+                .for_each(|(f, &t)| *f = face_normal(t, positions));
+            let faces = &*faces;
+            let normals = &mut self.normals;
+            normals.resize(positions.len(), Vec3::ZERO);
+            normals
+                .par_iter_mut()
+                .enumerate()
+                .with_min_len(CHUNK)
+                .for_each(|(v, n)| *n = vertex_normal(v as u32, links, faces));
+            let normals = &*normals;
+            out.positions
+                .par_iter_mut()
+                .zip(out.normals.par_iter_mut())
+                .zip(topology.weld.par_iter())
+                .with_min_len(CHUNK)
+                .for_each(|((p, n), &w)| {
+                    *p = positions[w as usize];
+                    *n = normals[w as usize];
+                });
+            return true;
+        }
+        // The triangles around the moved vertices get new face normals (the others keep
+        // theirs: same corners, same bits), then every corner of those triangles its sum.
+        let mut changed = Vec::new();
         for &v in &moved {
             for &s in links.copies_of(v) {
-                out.positions[s as usize] = self.positions[v as usize];
+                out.positions[s as usize] = positions[v as usize];
             }
             for &t in row(&links.tri_offsets, &links.tris, v) {
-                for c in triangles[t as usize] {
-                    if !links.mark[c as usize] {
-                        links.mark[c as usize] = true;
-                        around.push(c);
-                    }
+                if !links.tri_mark[t as usize] {
+                    links.tri_mark[t as usize] = true;
+                    changed.push(t);
+                }
+            }
+        }
+        let mut around = Vec::new();
+        for &t in &changed {
+            links.tri_mark[t as usize] = false;
+            faces[t as usize] = face_normal(triangles[t as usize], positions);
+            for c in triangles[t as usize] {
+                if !links.mark[c as usize] {
+                    links.mark[c as usize] = true;
+                    around.push(c);
                 }
             }
         }
         for &v in &around {
             links.mark[v as usize] = false;
-            let normal = vertex_normal(v, links, triangles, &self.positions);
+        }
+        let (links, faces) = (&*links, &*faces);
+        let normal = |&v: &u32| vertex_normal(v, links, faces);
+        let normals: Vec<Vec3> = if around.len() >= PARALLEL_THRESHOLD {
+            around.par_iter().with_min_len(CHUNK).map(normal).collect()
+        } else {
+            around.iter().map(normal).collect()
+        };
+        for (&v, &n) in around.iter().zip(&normals) {
             for &s in links.copies_of(v) {
-                out.normals[s as usize] = normal;
+                out.normals[s as usize] = n;
             }
         }
         true
     }
+}
+
+/// True when a stage bound again can be *refreshed* instead of applied in full: its tool
+/// deforms vertex by vertex (FFSD) and the new binding has the same bits as the old one
+/// (same mask, same weights, same prepared points). Every vertex whose input is unchanged
+/// then keeps its old output bits.
+fn same_binding(old: &LayerBinding, new: &LayerBinding) -> bool {
+    let same_bind = match (&old.bind, &new.bind) {
+        (Some(ToolBind::Ffsd(a)), Some(ToolBind::Ffsd(b))) => a.same_bits(b),
+        _ => false,
+    };
+    same_bind
+        && old.mask.indices == new.mask.indices
+        && old
+            .mask
+            .weights
+            .iter()
+            .zip(&new.mask.weights)
+            .all(|(a, b)| a.to_bits() == b.to_bits())
+}
+
+/// Evaluates a matched stage whose binding is unchanged (see [`same_binding`]) on the
+/// current positions: a vertex outside `D` has the input it had before, so it gets its
+/// `written` bits back; only the active vertices in `D` are deformed again (with
+/// [`LayerBinding::apply_at`], the same arithmetic as a full application). Afterwards a
+/// vertex of `D` active here stays in `D` exactly when its new output differs from the old.
+fn refresh(
+    positions: &mut [Vec3],
+    dirty: &mut Dirty,
+    stage: &mut Stage,
+    layer: &Layer,
+) -> Result<()> {
+    let at = dirty.positions_in(&stage.binding.mask.indices);
+    let indices = &stage.binding.mask.indices;
+    for &k in &at {
+        stage.saved[k as usize] = positions[indices[k as usize] as usize];
+    }
+    scatter_at(positions, indices, &stage.written);
+    for &k in &at {
+        positions[indices[k as usize] as usize] = stage.saved[k as usize];
+    }
+    stage.binding.apply_at(layer, positions, &at)?;
+    for &k in &at {
+        let v = indices[k as usize];
+        let new = positions[v as usize];
+        if same_bits(new, stage.written[k as usize]) {
+            dirty.remove(v);
+        }
+        stage.written[k as usize] = new;
+    }
+    Ok(())
 }
 
 /// Indices of the non-inert layers.
@@ -787,7 +1000,7 @@ fn non_inert(layers: &[Resolved]) -> Vec<usize> {
 
 /// `positions[i]` for every `i` of `indices`.
 fn gather(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
-    indices.iter().map(|&i| positions[i as usize]).collect()
+    gather_at(positions, indices)
 }
 
 #[cfg(test)]

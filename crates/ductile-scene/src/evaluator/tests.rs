@@ -565,3 +565,29 @@ fn evaluator_is_send() {
     fn send<T: Send>() {}
     send::<MeshEvaluator>();
 }
+
+#[test]
+fn a_rebound_layer_with_the_same_bind_is_refreshed_exactly() {
+    // The macro moves the top of the tube; `free` (whole mesh, anchor near y = 0.5) reads
+    // those vertices, so it is bound again, but its anchor did not move: same bind, and
+    // only the moved vertices are deformed again.
+    let rest = rest();
+    let mut doc = scene();
+    let stack = &mut doc.mesh_mut("m").unwrap().stack;
+    *stack = vec![with_area("mac", "top"), LayerSpec::new("free")];
+    let mut ev = MeshEvaluator::new("m", rest.clone());
+    ev.update(&doc).unwrap();
+    for value in [-0.5, 0.9, 0.0, 0.3] {
+        if let NodeKind::Macro(m) = &mut doc.node_mut("mac").unwrap().kind {
+            m.value = value;
+        }
+        let before = ev.refreshed;
+        let u = ev.update(&doc).unwrap();
+        check_against_fresh(&ev, &Ok(u), &doc, &rest);
+        // At 0 the macro is inert and `free` is the first layer that differs in the chain.
+        if value != 0.0 {
+            assert_eq!(u.layers_evaluated, 2, "{value}: {u:?}");
+            assert_eq!(ev.refreshed, before + 1, "{value}");
+        }
+    }
+}
