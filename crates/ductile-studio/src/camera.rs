@@ -97,10 +97,7 @@ pub fn orbit_camera(
     if !buttons.any_pressed(any_button) {
         *orbiting = false;
     }
-    let fov = match projection {
-        Projection::Perspective(p) => p.fov,
-        _ => std::f32::consts::FRAC_PI_4,
-    };
+    let fov = vertical_fov(projection);
     let pan_scale = orbit.distance * (fov * 0.5).tan() * 2.0 / 800.0;
     let cursor = windows.single().ok().and_then(Window::cursor_position);
     let delta = match (*last_cursor, cursor) {
@@ -151,6 +148,15 @@ pub fn orbit_camera(
     }
 }
 
+/// The vertical field of view of a camera (radians); π/4 for a non-perspective one.
+#[must_use]
+pub fn vertical_fov(projection: &Projection) -> f32 {
+    match projection {
+        Projection::Perspective(p) => p.fov,
+        _ => std::f32::consts::FRAC_PI_4,
+    }
+}
+
 /// A request from the View menu to frame the selection (as F does).
 #[derive(Resource, Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct FrameRequest(pub bool);
@@ -175,10 +181,7 @@ pub fn frame_selected(
     let Ok((mut orbit, projection)) = cameras.single_mut() else {
         return;
     };
-    let fov = match projection {
-        Projection::Perspective(p) => p.fov,
-        _ => std::f32::consts::FRAC_PI_4,
-    };
+    let fov = vertical_fov(projection);
     if let Some((min, max)) = selection_bounds(&selection, &entities, &meshes, &handles) {
         orbit.frame(min, max, fov);
     }

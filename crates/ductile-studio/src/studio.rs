@@ -12,7 +12,7 @@ use ductile_io::project::Project;
 
 use crate::camera::{
     KeyboardToViewport, OrbitCamera, PointerOverViewport, frame_selected, orbit_camera,
-    selection_bounds,
+    selection_bounds, vertical_fov,
 };
 use crate::files::{FileDialogs, StudioAction, run_actions};
 use crate::panels::Gestures;
@@ -237,10 +237,7 @@ fn frame_on_open(
     let Ok((mut orbit, projection)) = cameras.single_mut() else {
         return;
     };
-    let fov = match projection {
-        Projection::Perspective(p) => p.fov,
-        _ => std::f32::consts::FRAC_PI_4,
-    };
+    let fov = vertical_fov(projection);
     let everything = Selection::default();
     if let Some((min, max)) = selection_bounds(&everything, &entities, &meshes, &handles) {
         orbit.frame(min, max, fov);
