@@ -21,9 +21,18 @@
 //!
 //! `W/σ` is evaluated as `exp(−(|X − V|^α − |X − V_min|^α) / (2ε²))`, which is the same
 //! number but never divides by an underflowed `σ`.
+//!
+//! Vertices are deformed sixteen at a time ([`wide::f32x16`] lanes, with `wide`'s polynomial
+//! `exp` and `ln`, accurate to a few ulp). Every scalar value this module computes (`S_ref`,
+//! [`HeightLimit::limit`], the anchors' `|X − V_min|^α`) goes through the same lane
+//! arithmetic, so a vertex gets the same bits whichever vertices share its lanes.
 
 use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Serialize};
+use wide::f32x16 as Lane;
+
+/// Vertices per lane group.
+const LANES: usize = 16;
 
 use rayon::prelude::*;
 
@@ -172,31 +181,146 @@ impl HeightLimit {
     /// Applies the limit to a summed displacement `d` given the reference size `s_ref`.
     #[must_use]
     pub fn limit(&self, d: Vec3, s_ref: f32) -> Vec3 {
+        self.limit_lanes(Lanes3::splat(d), s_ref).lane(0)
+    }
+
+    /// [`HeightLimit::limit`] on a lane group of displacements (`s = |d|`; a zero `d` is
+    /// returned unchanged).
+    fn limit_lanes(&self, d: Lanes3, s_ref: f32) -> Lanes3 {
         let s = d.length();
-        if s == 0.0 {
-            return d;
-        }
-        match *self {
+        let zero = s.simd_eq(Lane::ZERO);
+        let limited = match *self {
             HeightLimit::Above { theta } => {
-                let s_max = theta * s_ref;
-                if s > s_max { d * (s_max / s) } else { d }
+                let s_max = Lane::splat(theta * s_ref);
+                let over = s.simd_gt(s_max);
+                d.select(over, d.scale(s_max / s))
             }
             HeightLimit::Below { theta } => {
-                let s_min = theta * s_ref;
-                if s <= s_min {
-                    Vec3::ZERO
-                } else {
-                    d * ((s - s_min) / s)
-                }
+                let s_min = Lane::splat(theta * s_ref);
+                let under = s.simd_le(s_min);
+                d.scale((s - s_min) / s).select(under, Lanes3::ZERO)
             }
             HeightLimit::Both { below, above } => {
-                let (lo, hi) = (below * s_ref, above * s_ref);
-                if s <= lo {
-                    Vec3::ZERO
-                } else {
-                    d * ((s - lo).min(hi - lo) / s)
-                }
+                let (lo, hi) = (Lane::splat(below * s_ref), Lane::splat(above * s_ref));
+                let under = s.simd_le(lo);
+                d.scale((s - lo).min(hi - lo) / s)
+                    .select(under, Lanes3::ZERO)
             }
+        };
+        limited.select(zero, d)
+    }
+}
+
+/// A lane group of points in structure-of-arrays form: the lanes of the FFSD kernel.
+#[derive(Debug, Clone, Copy)]
+struct Lanes3 {
+    x: Lane,
+    y: Lane,
+    z: Lane,
+}
+
+impl Lanes3 {
+    const ZERO: Self = Self {
+        x: Lane::ZERO,
+        y: Lane::ZERO,
+        z: Lane::ZERO,
+    };
+
+    /// `v` in every lane.
+    fn splat(v: Vec3) -> Self {
+        Self {
+            x: Lane::splat(v.x),
+            y: Lane::splat(v.y),
+            z: Lane::splat(v.z),
+        }
+    }
+
+    /// The positions of `active` (up to a lane group; the last one repeated to fill the lanes).
+    fn gather(positions: &[Vec3], active: &[u32]) -> Self {
+        let (mut x, mut y, mut z) = ([0.0_f32; LANES], [0.0_f32; LANES], [0.0_f32; LANES]);
+        let last = active.len() - 1;
+        for j in 0..LANES {
+            let v = positions[active[j.min(last)] as usize];
+            (x[j], y[j], z[j]) = (v.x, v.y, v.z);
+        }
+        Self {
+            x: Lane::new(x),
+            y: Lane::new(y),
+            z: Lane::new(z),
+        }
+    }
+
+    /// Up to a lane group of points (the last one repeated to fill the lanes).
+    fn load(points: &[Vec3]) -> Self {
+        let (mut x, mut y, mut z) = ([0.0_f32; LANES], [0.0_f32; LANES], [0.0_f32; LANES]);
+        let last = points.len() - 1;
+        for j in 0..LANES {
+            let v = points[j.min(last)];
+            (x[j], y[j], z[j]) = (v.x, v.y, v.z);
+        }
+        Self {
+            x: Lane::new(x),
+            y: Lane::new(y),
+            z: Lane::new(z),
+        }
+    }
+
+    /// Lane `j` as a vector.
+    fn lane(&self, j: usize) -> Vec3 {
+        Vec3::new(
+            self.x.as_array()[j],
+            self.y.as_array()[j],
+            self.z.as_array()[j],
+        )
+    }
+
+    /// Writes the first `out.len()` lanes to `out`.
+    fn write(&self, out: &mut [Vec3]) {
+        let (x, y, z) = (self.x.as_array(), self.y.as_array(), self.z.as_array());
+        for (j, o) in out.iter_mut().enumerate() {
+            *o = Vec3::new(x[j], y[j], z[j]);
+        }
+    }
+
+    fn add(self, o: Self) -> Self {
+        Self {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+
+    fn sub(self, o: Self) -> Self {
+        Self {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+
+    fn scale(self, k: Lane) -> Self {
+        Self {
+            x: self.x * k,
+            y: self.y * k,
+            z: self.z * k,
+        }
+    }
+
+    /// `x² + y² + z²`, summed in that order (as glam's `dot`).
+    fn length_squared(&self) -> Lane {
+        self.x * self.x + self.y * self.y + self.z * self.z
+    }
+
+    fn length(&self) -> Lane {
+        self.length_squared().sqrt()
+    }
+
+    /// `other` in the lanes where `mask` is set, `self` elsewhere.
+    fn select(self, mask: Lane, other: Self) -> Self {
+        Self {
+            x: mask.select(other.x, self.x),
+            y: mask.select(other.y, self.y),
+            z: mask.select(other.z, self.z),
         }
     }
 }
@@ -247,25 +371,27 @@ struct PreparedPoint {
 }
 
 impl PreparedPoint {
+    /// `γ · W/σ · (V − T)` in each lane.
     #[inline]
-    fn displacement(&self, v: Vec3) -> Vec3 {
-        let e = (pow_half(self.centre.distance_squared(v), self.half_alpha) - self.anchor_pow)
-            * self.inv_two_eps2;
-        (v - self.target) * (self.gamma * (-e).exp())
+    fn displacement(&self, v: &Lanes3) -> Lanes3 {
+        let d2 = Lanes3::splat(self.centre).sub(*v).length_squared();
+        let e = (pow_half(d2, self.half_alpha) - Lane::splat(self.anchor_pow))
+            * Lane::splat(self.inv_two_eps2);
+        v.sub(Lanes3::splat(self.target))
+            .scale(Lane::splat(self.gamma) * (-e).exp())
     }
 }
 
-/// `(d²)^(α/2) = |d|^α`, with fast paths for α = 2 and α = 1.
+/// `(d²)^(α/2) = |d|^α` in each lane, with fast paths for α = 2 and α = 1.
 #[inline]
-fn pow_half(d2: f32, half_alpha: f32) -> f32 {
+fn pow_half(d2: Lane, half_alpha: f32) -> Lane {
     if half_alpha == 1.0 {
         d2
     } else if half_alpha == 0.5 {
         d2.sqrt()
-    } else if d2 == 0.0 {
-        0.0
     } else {
-        (half_alpha * d2.ln()).exp()
+        let p = (Lane::splat(half_alpha) * d2.ln()).exp();
+        d2.simd_eq(Lane::ZERO).select(Lane::ZERO, p)
     }
 }
 
@@ -309,10 +435,11 @@ impl FfsdBind {
             })
     }
 
-    fn sum(&self, v: Vec3) -> Vec3 {
+    /// `D(V) = Σₖ dₖ(V)` in each lane (Eq. 3), summed in point order from zero.
+    fn sum(&self, v: &Lanes3) -> Lanes3 {
         self.points
             .iter()
-            .fold(Vec3::ZERO, |acc, p| acc + p.displacement(v))
+            .fold(Lanes3::ZERO, |acc, p| acc.add(p.displacement(v)))
     }
 }
 
@@ -352,7 +479,13 @@ impl Deformer for FfsdTool {
                     gamma: p.gamma * self.gain,
                     half_alpha,
                     inv_two_eps2: 1.0 / (2.0 * p.epsilon * p.epsilon),
-                    anchor_pow: pow_half(centre.distance_squared(v_min), half_alpha),
+                    anchor_pow: pow_half(
+                        Lanes3::splat(centre)
+                            .sub(Lanes3::splat(v_min))
+                            .length_squared(),
+                        half_alpha,
+                    )
+                    .as_array()[0],
                     anchor,
                 }
             })
@@ -361,20 +494,19 @@ impl Deformer for FfsdTool {
         bind.s_ref = bind
             .points
             .iter()
-            .map(|p| bind.sum(input.positions[p.anchor as usize]).length())
+            .map(|p| {
+                bind.sum(&Lanes3::splat(input.positions[p.anchor as usize]))
+                    .lane(0)
+                    .length()
+            })
             .fold(0.0, f32::max);
         Ok(bind)
     }
 
+    /// `P = V + D(V)` (with the height limit), a lane group at a time.
     fn deform(&self, bind: &FfsdBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
-        for (o, &i) in out.iter_mut().zip(active) {
-            let v = positions[i as usize];
-            let d = bind.sum(v);
-            let d = match &self.height {
-                Some(h) => h.limit(d, bind.s_ref),
-                None => d,
-            };
-            *o = v + d;
+        for (o, a) in out.chunks_mut(LANES).zip(active.chunks(LANES)) {
+            self.deform_lanes(bind, Lanes3::gather(positions, a), o);
         }
     }
 
@@ -408,23 +540,44 @@ impl Deformer for FfsdTool {
     }
 }
 
+impl FfsdTool {
+    /// [`Deformer::deform`] on input positions already gathered: `out[j]` is the deformed
+    /// `inputs[j]` (same bits as `deform` gives that vertex).
+    pub fn deform_inputs(&self, bind: &FfsdBind, inputs: &[Vec3], out: &mut [Vec3]) {
+        for (o, v) in out.chunks_mut(LANES).zip(inputs.chunks(LANES)) {
+            self.deform_lanes(bind, Lanes3::load(v), o);
+        }
+    }
+
+    /// `P = V + D(V)`, limited, for one lane group; writes `out.len()` lanes.
+    #[inline]
+    fn deform_lanes(&self, bind: &FfsdBind, v: Lanes3, out: &mut [Vec3]) {
+        let d = bind.sum(&v);
+        let d = match &self.height {
+            Some(h) => h.limit_lanes(d, bind.s_ref),
+            None => d,
+        };
+        v.add(d).write(out);
+    }
+}
+
 /// For each of `xs`, the active vertex closest to it (the first one on ties). Long lists
 /// are searched in one parallel pass over chunks whose winners are combined in order with
 /// the same strict comparison, so the result is the serial one.
 fn closest(positions: &[Vec3], active: &[u32], xs: &[Vec3]) -> Vec<u32> {
+    // One sweep over the chunk for all points (each vertex is read once).
     let search = |chunk: &[u32]| -> Vec<(u32, f32)> {
-        xs.iter()
-            .map(|&x| {
-                let mut best = (chunk[0], f32::INFINITY);
-                for &i in chunk {
-                    let d = positions[i as usize].distance_squared(x);
-                    if d < best.1 {
-                        best = (i, d);
-                    }
+        let mut best = vec![(chunk[0], f32::INFINITY); xs.len()];
+        for &i in chunk {
+            let p = positions[i as usize];
+            for (b, &x) in best.iter_mut().zip(xs) {
+                let d = p.distance_squared(x);
+                if d < b.1 {
+                    *b = (i, d);
                 }
-                best
-            })
-            .collect()
+            }
+        }
+        best
     };
     if active.len() < PARALLEL_THRESHOLD {
         return search(active).into_iter().map(|b| b.0).collect();
@@ -728,6 +881,50 @@ mod tests {
         for (p, q) in a.iter().zip(&b) {
             assert!((m.transform_point3(*p) - *q).length() < 1e-4, "{p} → {q}");
         }
+    }
+
+    /// A vertex gets the same bits whichever vertices share its lanes: all 37 vertices at
+    /// once (two full lane groups and a padded one), from gathered inputs, and each one
+    /// alone agree, and the scalar height limit agrees with the lanes'.
+    #[test]
+    fn lanes_give_each_vertex_the_same_bits_in_any_group() {
+        let positions: Vec<Vec3> = (0..37)
+            .map(|i| Vec3::new(i as f32 * 0.1, (i % 5) as f32 * 0.2, 0.05 * (i % 3) as f32))
+            .collect();
+        let active: Vec<u32> = (0..37).collect();
+        let mut p = ControlPoint::basic(Vec3::new(1.0, 0.4, 0.6), 0.5, 0.7, 0.5);
+        p.mode = PointMode::Virtual;
+        let mut tool = FfsdTool::new(vec![p, ControlPoint::basic(Vec3::Y, -0.3, 2.0, 0.4)]);
+        tool.height = Some(HeightLimit::Both {
+            below: 0.1,
+            above: 0.7,
+        });
+        let topology = triangle().topology().clone();
+        let bind = tool
+            .bind(&BindInput {
+                positions: &positions,
+                topology: &topology,
+                active: &active,
+            })
+            .unwrap();
+        let mut all = vec![Vec3::ZERO; 37];
+        tool.deform(&bind, &positions, &active, &mut all);
+        let mut gathered = vec![Vec3::ZERO; 37];
+        tool.deform_inputs(&bind, &positions, &mut gathered);
+        assert_eq!(gathered, all);
+        for i in 0..37 {
+            let mut one = [Vec3::ZERO];
+            tool.deform(&bind, &positions, &[i], &mut one);
+            assert_eq!(
+                one[0].to_array().map(f32::to_bits),
+                all[i as usize].to_array().map(f32::to_bits)
+            );
+        }
+        let d = Vec3::new(0.3, -0.2, 0.1);
+        let h = HeightLimit::Above { theta: 0.5 };
+        let lanes = h.limit_lanes(Lanes3::splat(d), 0.6);
+        assert_eq!(h.limit(d, 0.6), lanes.lane(7));
+        assert!((h.limit(d, 0.6).length() - 0.3).abs() < 1e-6);
     }
 
     #[test]
