@@ -230,21 +230,28 @@ impl Influence {
     /// The mask over `positions` (welded, the layer's input): every vertex with `w(v) > 0`.
     #[must_use]
     pub fn mask(&self, positions: &[Vec3]) -> Mask {
+        self.mask_in(self.area.as_deref(), positions)
+    }
+
+    /// [`Influence::mask`] with `area` (sorted welded indices) in place of [`Influence::area`],
+    /// for a caller that keeps the area's vertices elsewhere (shared between layers).
+    #[must_use]
+    pub fn mask_in(&self, area: Option<&[u32]>, positions: &[Vec3]) -> Mask {
         let n = positions.len();
         if self.volumes.is_empty() {
             // `g(v) = 1` everywhere: the mask is the area (or every vertex), weight 1.
-            let indices: Vec<u32> = match &self.area {
+            let indices: Vec<u32> = match area {
                 Some(area) => area.iter().copied().filter(|&i| (i as usize) < n).collect(),
                 None => (0..n as u32).collect(),
             };
             let weights = vec![1.0; indices.len()];
             return Mask { indices, weights };
         }
-        let candidates = self.area.as_ref().map_or(n, Vec::len);
+        let candidates = area.map_or(n, <[u32]>::len);
         if candidates >= PARALLEL_THRESHOLD {
             // Weights in parallel (each vertex's arithmetic unchanged), then kept in order.
             let weight = |i: u32| (i, self.volume_weight(positions[i as usize]));
-            let all: Vec<(u32, f32)> = match &self.area {
+            let all: Vec<(u32, f32)> = match area {
                 Some(area) => area
                     .par_iter()
                     .with_min_len(CHUNK)
@@ -268,7 +275,7 @@ impl Influence {
                 mask.weights.push(w);
             }
         };
-        match &self.area {
+        match area {
             Some(area) => area
                 .iter()
                 .copied()

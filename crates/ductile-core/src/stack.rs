@@ -98,16 +98,88 @@ impl LayerBinding {
             Some(inf) => inf.mask(positions),
             None => Mask::all(positions.len()),
         };
+        Self::bind_masked(&layer.tool, mask, positions, topology)
+    }
+
+    /// Binds `tool` on `positions` with an already computed `mask` (which must be the
+    /// layer's mask on `positions` for the result to equal [`LayerBinding::bind`]'s).
+    pub fn bind_masked(
+        tool: &Tool,
+        mask: Mask,
+        positions: &[Vec3],
+        topology: &Topology,
+    ) -> Result<Self> {
         let bind = if mask.is_empty() {
             None
         } else {
-            Some(layer.tool.bind(&BindInput {
+            Some(tool.bind(&BindInput {
                 positions,
                 topology,
                 active: &mask.indices,
             })?)
         };
         Ok(Self { mask, bind })
+    }
+
+    /// [`LayerBinding::apply_refining`], also returning the active vertices' positions
+    /// before and after, in mask order (what an incremental evaluator keeps). Same bits as
+    /// `apply_refining`. A per-vertex tool is applied in one pass over (parallel) chunks of
+    /// the mask — read the input, deform, check, blend — followed by one scatter.
+    pub fn apply_recorded(&self, layer: &Layer, positions: &mut Vec<Vec3>) -> Result<Recorded> {
+        let indices = &self.mask.indices;
+        let Some(bind) = self.bind.as_ref().filter(|_| !layer.tool.is_whole_layer()) else {
+            let saved = gather_at(positions, indices);
+            let splits = self.apply_refining(layer, positions)?;
+            let written = gather_at(positions, indices);
+            return Ok(Recorded {
+                saved,
+                written,
+                splits,
+            });
+        };
+        let n = indices.len();
+        let (mut saved, mut written) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+        let input: &[Vec3] = positions;
+        let weights = &self.mask.weights;
+        // One chunk starting at mask position `k0`; returns the position of its first
+        // non-finite tool output.
+        let work = |k0: usize, active: &[u32], s: &mut [Vec3], o: &mut [Vec3]| {
+            for (s, &i) in s.iter_mut().zip(active) {
+                *s = input[i as usize];
+            }
+            layer.tool.deform_gathered(bind, input, s, active, o);
+            let bad = o.iter().position(|p| !p.is_finite()).map(|j| k0 + j);
+            for (j, (o, &p)) in o.iter_mut().zip(s.iter()).enumerate() {
+                *o = blend_one(p, *o, weights[k0 + j] * layer.weight);
+            }
+            bad
+        };
+        let bad = if n >= PARALLEL_THRESHOLD {
+            saved
+                .par_chunks_mut(CHUNK)
+                .zip(written.par_chunks_mut(CHUNK))
+                .zip(indices.par_chunks(CHUNK))
+                .enumerate()
+                .filter_map(|(c, ((s, o), a))| work(c * CHUNK, a, s, o))
+                .min()
+        } else {
+            work(0, indices, &mut saved, &mut written)
+        };
+        if let Some(k) = bad {
+            return Err(CoreError::Degenerate {
+                what: format!("layer '{}'", layer.name),
+                problem: format!(
+                    "the tool produced a non-finite position for vertex {}",
+                    indices[k]
+                ),
+            });
+        }
+        scatter_at(positions, indices, &written);
+        Ok(Recorded {
+            saved,
+            written,
+            splits: None,
+        })
     }
 
     /// Deforms `positions` in place with this binding (see the module documentation). A
@@ -270,6 +342,17 @@ fn deform_chunks(
     }
 }
 
+/// What [`LayerBinding::apply_recorded`] returns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recorded {
+    /// Input positions of the mask's vertices, in mask order.
+    pub saved: Vec<Vec3>,
+    /// Output positions of the mask's vertices, in mask order.
+    pub written: Vec<Vec3>,
+    /// The splits of a refining layer (see [`LayerBinding::apply_refining`]).
+    pub splits: Option<Vec<EdgePoint>>,
+}
+
 /// Calls `f(k, &mut values[indices[k]])` for every `k`. When `indices` has at least
 /// [`PARALLEL_COPY_THRESHOLD`] entries and is strictly ascending (as a [`Mask`]'s indices are), the
 /// calls run in parallel chunks of [`CHUNK`] entries, each owning a disjoint range of
@@ -281,14 +364,54 @@ pub fn for_each_at<T: Send>(
     indices: &[u32],
     f: impl Fn(usize, &mut T) + Sync + Send,
 ) {
-    let ascending = indices.len() >= PARALLEL_COPY_THRESHOLD
-        && indices.windows(2).all(|w| w[0] < w[1])
-        && indices.last().is_some_and(|&i| (i as usize) < values.len());
-    if !ascending {
+    if indices.len() < PARALLEL_COPY_THRESHOLD {
         for (k, &i) in indices.iter().enumerate() {
             f(k, &mut values[i as usize]);
         }
         return;
+    }
+    map_chunks_at(values, indices, |k0, chunk, slice| {
+        for (j, &i) in chunk.iter().enumerate() {
+            f(k0 + j, slice.get(i));
+        }
+    });
+}
+
+/// The part of `values` that one chunk of strictly ascending indices owns (see
+/// [`map_chunks_at`]).
+pub struct ChunkValues<'a, T> {
+    slice: &'a mut [T],
+    base: usize,
+}
+
+impl<T> ChunkValues<'_, T> {
+    /// `values[i]`, for an index `i` of the chunk.
+    pub fn get(&mut self, i: u32) -> &mut T {
+        &mut self.slice[i as usize - self.base]
+    }
+}
+
+/// Calls `f(k0, chunk, part)` for consecutive chunks of [`CHUNK`] entries of `indices`
+/// (`k0` the position of the chunk's first entry), giving each the part of `values` its
+/// indices fall in, and returns the results in chunk order. When `indices` is strictly
+/// ascending and in range, the chunks own disjoint parts and run in parallel; otherwise
+/// there is one chunk, the whole list, run in place.
+pub fn map_chunks_at<T: Send, R: Send>(
+    values: &mut [T],
+    indices: &[u32],
+    f: impl Fn(usize, &[u32], &mut ChunkValues<'_, T>) -> R + Sync + Send,
+) -> Vec<R> {
+    let ascending = indices.windows(2).all(|w| w[0] < w[1])
+        && indices.last().is_none_or(|&i| (i as usize) < values.len());
+    if !ascending || indices.len() <= CHUNK {
+        return vec![f(
+            0,
+            indices,
+            &mut ChunkValues {
+                slice: values,
+                base: 0,
+            },
+        )];
     }
     let mut parts = Vec::with_capacity(indices.len().div_ceil(CHUNK));
     let mut rest = values;
@@ -298,15 +421,14 @@ pub fn for_each_at<T: Send>(
             .get((c + 1) * CHUNK)
             .map_or(base + rest.len(), |&next| next as usize);
         let (head, tail) = rest.split_at_mut(end - base);
-        parts.push((c * CHUNK, chunk, head, base));
+        parts.push((c * CHUNK, chunk, ChunkValues { slice: head, base }));
         rest = tail;
         base = end;
     }
-    parts.into_par_iter().for_each(|(k0, chunk, slice, base)| {
-        for (j, &i) in chunk.iter().enumerate() {
-            f(k0 + j, &mut slice[i as usize - base]);
-        }
-    });
+    parts
+        .into_par_iter()
+        .map(|(k0, chunk, mut part)| f(k0, chunk, &mut part))
+        .collect()
 }
 
 /// `values[indices[k]] = src[k]` for every `k` (`src` as long as `indices`): a plain loop,
@@ -412,6 +534,58 @@ mod tests {
         let values: Vec<Vec3> = (0..3 * n).map(|i| Vec3::splat(i as f32 * 0.5)).collect();
         let indices: Vec<u32> = (0..n).map(|k| 3 * k + k % 3).collect();
         (values, indices)
+    }
+
+    /// A 200×200 sheet, an FFSD layer of half weight limited by a smooth sphere: the one-pass
+    /// recorded application (parallel chunks) gives the bits of `apply_refining`, and its
+    /// record holds the input and output of every active vertex.
+    #[test]
+    fn recorded_application_matches_the_plain_one() {
+        use crate::ffsd::{ControlPoint, FfsdTool, HeightLimit};
+        use crate::influence::{Falloff, Shape, Volume};
+        let mesh = crate::primitives::grid(200, 200, false, |r, c| {
+            Vec3::new(
+                c as f32 / 100.0,
+                r as f32 / 100.0,
+                ((r * c) % 7) as f32 * 1e-3,
+            )
+        });
+        let rest = RestMesh::new(mesh, "sheet").unwrap();
+        let mut tool = FfsdTool::new(vec![
+            ControlPoint::basic(Vec3::new(1.0, 1.0, 0.3), 0.4, 2.0, 0.3),
+            ControlPoint::basic(Vec3::new(0.7, 1.2, 0.2), -0.2, 0.8, 0.2),
+        ]);
+        tool.height = Some(HeightLimit::Above { theta: 0.8 });
+        let mut layer = Layer::new("bump", Tool::Ffsd(tool));
+        layer.weight = 0.5;
+        let placement = glam::Affine3A::from_translation(Vec3::new(1.0, 1.0, 0.0));
+        layer.influence = Some(Influence {
+            volumes: vec![Volume::new(Shape::Sphere { radius: 0.9 }, placement, "v").unwrap()],
+            falloff: Falloff::Smooth,
+            ..Influence::default()
+        });
+        let input = rest.welded_positions().to_vec();
+        let binding = LayerBinding::bind(&layer, &input, rest.topology()).unwrap();
+        assert!(binding.mask.len() > PARALLEL_THRESHOLD + CHUNK);
+        assert!(binding.mask.weights.iter().any(|&w| w < 1.0));
+        let mut plain = input.clone();
+        assert!(
+            binding
+                .apply_refining(&layer, &mut plain)
+                .unwrap()
+                .is_none()
+        );
+        let mut recorded = input.clone();
+        let rec = binding.apply_recorded(&layer, &mut recorded).unwrap();
+        let bits = |p: &[Vec3]| -> Vec<[u32; 3]> {
+            p.iter().map(|v| v.to_array().map(f32::to_bits)).collect()
+        };
+        assert_eq!(bits(&recorded), bits(&plain));
+        assert!(rec.splits.is_none());
+        let idx = &binding.mask.indices;
+        assert_eq!(bits(&rec.saved), bits(&gather_at(&input, idx)));
+        assert_eq!(bits(&rec.written), bits(&gather_at(&plain, idx)));
+        assert!(rec.saved.iter().zip(&rec.written).any(|(a, b)| a != b));
     }
 
     #[test]

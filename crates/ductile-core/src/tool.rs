@@ -160,6 +160,23 @@ impl Tool {
         })
     }
 
+    /// [`Tool::deform`] with the active vertices' input positions already gathered
+    /// (`inputs[j]` is `positions[active[j]]`): FFSD reads them in order, the other tools
+    /// read `positions` as usual. Same bits as [`Tool::deform`].
+    pub fn deform_gathered(
+        &self,
+        bind: &ToolBind,
+        positions: &[Vec3],
+        inputs: &[Vec3],
+        active: &[u32],
+        out: &mut [Vec3],
+    ) {
+        match (self, bind) {
+            (Tool::Ffsd(t), ToolBind::Ffsd(b)) => t.deform_inputs(b, inputs, out),
+            _ => self.deform(bind, positions, active, out),
+        }
+    }
+
     /// See [`Deformer::deform`]. A bind of another kind deforms nothing (`out` keeps the
     /// input positions); the stack never pairs them that way.
     pub fn deform(&self, bind: &ToolBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {

@@ -39,13 +39,14 @@
 
 use std::collections::HashMap;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::Vec3;
 
 use ductile_core::influence::Mask;
 use ductile_core::mesh::{Deformed, RestMesh, Topology};
 use ductile_core::stack::{
-    CHUNK, Layer, LayerBinding, PARALLEL_THRESHOLD, Stack, gather_at, scatter_at,
+    CHUNK, Layer, LayerBinding, PARALLEL_THRESHOLD, Recorded, Stack, map_chunks_at, scatter_at,
 };
 use ductile_core::tool::{Tool, ToolBind};
 use rayon::prelude::*;
@@ -88,6 +89,21 @@ impl Resolved {
             inf.area = Some(area.as_ref().clone());
         }
         layer
+    }
+
+    /// The layer's mask on `positions` (its input) and its tool's bind: what
+    /// [`LayerBinding::bind`] gives for [`Resolved::full`], without copying the area twice.
+    fn bind(&self, positions: &[Vec3], topology: &Topology) -> Result<LayerBinding> {
+        let mask = match &self.layer.influence {
+            Some(inf) => inf.mask_in(self.area.as_deref().map(Vec::as_slice), positions),
+            None => Mask::all(positions.len()),
+        };
+        Ok(LayerBinding::bind_masked(
+            &self.layer.tool,
+            mask,
+            positions,
+            topology,
+        )?)
     }
 
     /// The welded vertices whose input positions the layer's mask, bind and deformation
@@ -264,12 +280,36 @@ impl Dirty {
     /// pass, for two stages with the same active vertices: every vertex they touch is
     /// settled, so only the last rule's outcome remains.
     fn settle_same(&mut self, old: &Stage, new: &Stage) {
-        for ((&v, &a), &b) in old.indices().iter().zip(&old.written).zip(&new.written) {
-            if same_bits(a, b) {
-                self.remove(v);
-            } else {
-                self.insert(v);
+        let (idx, a, b) = (old.indices(), &old.written, &new.written);
+        if idx.len() < PARALLEL_THRESHOLD || self.flag.len() <= idx[idx.len() - 1] as usize {
+            for ((&v, &a), &b) in idx.iter().zip(a).zip(b) {
+                if same_bits(a, b) {
+                    self.remove(v);
+                } else {
+                    self.insert(v);
+                }
             }
+            return;
+        }
+        // In parallel chunks (each owns the flags of its vertices): the change of the count
+        // and the vertices added, merged in chunk order.
+        let parts = map_chunks_at(&mut self.flag, idx, |k0, chunk, flags| {
+            let (mut removed, mut added) = (0_usize, Vec::new());
+            for (j, &v) in chunk.iter().enumerate() {
+                let f = flags.get(v);
+                if same_bits(a[k0 + j], b[k0 + j]) {
+                    removed += usize::from(*f);
+                    *f = false;
+                } else if !*f {
+                    *f = true;
+                    added.push(v);
+                }
+            }
+            (removed, added)
+        });
+        for (removed, added) in parts {
+            self.count = self.count - removed + added.len();
+            self.list.extend(added);
         }
     }
 
@@ -314,6 +354,8 @@ struct Links {
     copies: Vec<u32>,
     mark: Vec<bool>,
     tri_mark: Vec<bool>,
+    /// Welded vertices whose normal must be summed again (set in parallel).
+    around: Vec<AtomicBool>,
 }
 
 impl Links {
@@ -342,6 +384,7 @@ impl Links {
             copies,
             mark: vec![false; n],
             tri_mark: vec![false; topology.triangles.len()],
+            around: (0..n).map(|_| AtomicBool::new(false)).collect(),
         }
     }
 
@@ -426,7 +469,7 @@ pub struct MeshEvaluator {
     /// Face normals `(b − a) × (c − a)` of the output's welded triangles; empty when not
     /// known (they are rebuilt with the next full output).
     faces: Vec<Vec3>,
-    /// Scratch space for the welded normals of a full output rebuild.
+    /// The output's welded normals; valid whenever `faces` is (patched with it).
     normals: Vec<Vec3>,
     dirty: Dirty,
     /// How many stages were refreshed (see [`refresh`]) since the evaluator was made.
@@ -748,7 +791,7 @@ impl MeshEvaluator {
                 self.stages.push(stage);
                 continue;
             }
-            let binding = LayerBinding::bind(&r.full(), &self.positions, rest.topology())?;
+            let binding = r.bind(&self.positions, rest.topology())?;
             if let Some(mut stage) = matched.take_if(|o| same_binding(&o.binding, &binding)) {
                 refresh(&mut self.positions, &mut self.dirty, &mut stage, &r.layer)?;
                 evaluated += 1;
@@ -757,14 +800,14 @@ impl MeshEvaluator {
                 self.stages.push(stage);
                 continue;
             }
-            let saved = gather(&self.positions, &binding.mask.indices);
-            if binding
-                .apply_refining(&r.layer, &mut self.positions)?
-                .is_some()
-            {
+            let Recorded {
+                saved,
+                written,
+                splits,
+            } = binding.apply_recorded(&r.layer, &mut self.positions)?;
+            if splits.is_some() {
                 return Ok(None);
             }
-            let written = gather(&self.positions, &binding.mask.indices);
             let stage = Stage {
                 index: li,
                 resolved: r.clone(),
@@ -821,25 +864,37 @@ impl MeshEvaluator {
         let faces = &mut self.faces;
         if faces.len() == triangles.len() && moved.len() * OUTPUT_FULL_DIVISOR > positions.len() {
             // Many moved vertices: sweeps in order (and in parallel) instead of following
-            // each moved vertex. A triangle with a moved corner gets a new face normal; a
-            // stored vertex whose welded vertex has such a triangle gets a new normal.
+            // each moved vertex. A triangle with a moved corner gets a new face normal and
+            // marks its corners, whose welded normals are then summed again; every stored
+            // vertex copies its welded position and normal.
             for &v in &moved {
                 links.mark[v as usize] = true;
             }
-            let mark = &links.mark;
-            links
-                .tri_mark
+            let (mark, around) = (&links.mark, &links.around);
+            faces
                 .par_iter_mut()
-                .zip(faces.par_iter_mut())
                 .zip(triangles.par_iter())
                 .with_min_len(CHUNK)
-                .for_each(|((changed, f), &t)| {
-                    *changed = t.iter().any(|&c| mark[c as usize]);
-                    if *changed {
+                .for_each(|(f, &t)| {
+                    if t.iter().any(|&c| mark[c as usize]) {
                         *f = face_normal(t, positions);
+                        for c in t {
+                            around[c as usize].store(true, Ordering::Relaxed);
+                        }
                     }
                 });
             let (links_ref, faces_ref) = (&*links, &*faces);
+            self.normals
+                .par_iter_mut()
+                .zip(links_ref.around.par_iter())
+                .enumerate()
+                .with_min_len(CHUNK)
+                .for_each(|(w, (n, a))| {
+                    if a.swap(false, Ordering::Relaxed) {
+                        *n = vertex_normal(w as u32, links_ref, faces_ref);
+                    }
+                });
+            let normals = &self.normals;
             out.positions
                 .par_iter_mut()
                 .zip(out.normals.par_iter_mut())
@@ -847,15 +902,8 @@ impl MeshEvaluator {
                 .with_min_len(CHUNK)
                 .for_each(|((p, n), &w)| {
                     *p = positions[w as usize];
-                    let around = links_ref
-                        .triangles_of(w)
-                        .iter()
-                        .any(|&t| links_ref.tri_mark[t as usize]);
-                    if around {
-                        *n = vertex_normal(w, links_ref, faces_ref);
-                    }
+                    *n = normals[w as usize];
                 });
-            links.tri_mark.par_iter_mut().for_each(|c| *c = false);
             for &v in &moved {
                 links.mark[v as usize] = false;
             }
@@ -929,6 +977,7 @@ impl MeshEvaluator {
             around.iter().map(normal).collect()
         };
         for (&v, &n) in around.iter().zip(&normals) {
+            self.normals[v as usize] = n;
             for &s in links.copies_of(v) {
                 out.normals[s as usize] = n;
             }
@@ -996,11 +1045,6 @@ fn non_inert(layers: &[Resolved]) -> Vec<usize> {
         .filter(|(_, r)| !r.layer.is_inert())
         .map(|(i, _)| i)
         .collect()
-}
-
-/// `positions[i]` for every `i` of `indices`.
-fn gather(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
-    gather_at(positions, indices)
 }
 
 #[cfg(test)]
