@@ -11,6 +11,8 @@
 //! Vertices outside the mask keep their input bits. The rest mesh is never modified.
 //! [`LayerBinding`] is the unit a cache keeps between evaluations.
 
+use std::sync::Arc;
+
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -85,8 +87,9 @@ impl Layer {
 /// A layer's cached bind: its mask and the tool's bind on one input.
 #[derive(Debug)]
 pub struct LayerBinding {
-    /// Active vertices and weights.
-    pub mask: Mask,
+    /// Active vertices and weights (shared: a cache may reuse a mask that does not depend on
+    /// the input, such as an area's).
+    pub mask: Arc<Mask>,
     /// The tool's bind; `None` when the mask is empty.
     pub bind: Option<ToolBind>,
 }
@@ -98,14 +101,14 @@ impl LayerBinding {
             Some(inf) => inf.mask(positions),
             None => Mask::all(positions.len()),
         };
-        Self::bind_masked(&layer.tool, mask, positions, topology)
+        Self::bind_masked(&layer.tool, Arc::new(mask), positions, topology)
     }
 
     /// Binds `tool` on `positions` with an already computed `mask` (which must be the
     /// layer's mask on `positions` for the result to equal [`LayerBinding::bind`]'s).
     pub fn bind_masked(
         tool: &Tool,
-        mask: Mask,
+        mask: Arc<Mask>,
         positions: &[Vec3],
         topology: &Topology,
     ) -> Result<Self> {

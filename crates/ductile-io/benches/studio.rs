@@ -2,8 +2,12 @@
 //! [`MeshEvaluator::update`] after a macro slider moves or an FFSD point is dragged, on the
 //! identikit scenes (Lee Perry-Smith head, 8,844 welded vertices) and on the head with every
 //! triangle split into 25 ([`ductile_core::primitives::subdivided_n`] with `n = 5`: 221,052
-//! welded vertices, `head-221k` in the names; the target is stated for "~250k"). Each
-//! iteration alternates between two values so that every iteration really evaluates again. `full/*` times a fresh
+//! welded vertices, `head-221k` in the names; the target is stated for "~250k") and split
+//! into 36 (`n = 6`: 318k welded vertices, `head-318k`), which bracket 250k. Each
+//! iteration alternates between two values so that every iteration really evaluates again.
+//! `slider/identikit-head*` moves one slider of the Studio's default scene (every other macro
+//! at 0); `slider/head-*` moves one of the 45 set sliders of the identikit demo (the work of
+//! a face in progress): `middle` re-evaluates 10 layers, `first` 16. `full/*` times a fresh
 //! `Document::evaluate` of the same scene for comparison.
 //! Targets (issue 4): ≤ 2 ms per slider change on the identikit scene, ≤ 16 ms on the
 //! ~250k-vertex head.
@@ -121,6 +125,7 @@ fn studio(c: &mut Criterion) {
     let middle = |d: &mut Document, f: bool| set_macro(d, "nose-length", if f { 0.5 } else { 0.7 });
     let first = |d: &mut Document, f: bool| set_macro(d, "chin-cleft", if f { 0.3 } else { 0.5 });
 
+    let zero_221k = zero.clone();
     bench_edit(c, "slider/identikit-head", zero, &rest, |d, f| {
         set_macro(d, "nose-length", if f { 0.4 } else { 0.5 });
     });
@@ -149,7 +154,17 @@ fn studio(c: &mut Criterion) {
     );
     bench_full(c, "full/identikit-demo", &demo, &rest);
 
+    bench_edit(
+        c,
+        "slider/identikit-head/head-221k",
+        zero_221k,
+        &big,
+        |d, f| {
+            set_macro(d, "nose-length", if f { 0.4 } else { 0.5 });
+        },
+    );
     bench_edit(c, "slider/head-221k/middle", demo.clone(), &big, middle);
+    let demo_first_318k = demo_first.clone();
     bench_edit(c, "slider/head-221k/first", demo_first, &big, first);
     bench_edit(
         c,
@@ -159,6 +174,18 @@ fn studio(c: &mut Criterion) {
         drag,
     );
     bench_full(c, "full/head-221k", &demo, &big);
+
+    // The next uniform split above ~250k vertices, to bracket the target from above.
+    let bigger = {
+        let mesh = subdivided_n(rest.mesh(), 6);
+        RestMesh::new(mesh, "head split 6×6").expect("subdivided head")
+    };
+    eprintln!(
+        "split 6×6: {} welded vertices",
+        bigger.welded_positions().len()
+    );
+    bench_edit(c, "slider/head-318k/middle", demo, &bigger, middle);
+    bench_edit(c, "slider/head-318k/first", demo_first_318k, &bigger, first);
 }
 
 criterion_group! {

@@ -93,10 +93,34 @@ impl Resolved {
 
     /// The layer's mask on `positions` (its input) and its tool's bind: what
     /// [`LayerBinding::bind`] gives for [`Resolved::full`], without copying the area twice.
-    fn bind(&self, positions: &[Vec3], topology: &Topology) -> Result<LayerBinding> {
-        let mask = match &self.layer.influence {
-            Some(inf) => inf.mask_in(self.area.as_deref().map(Vec::as_slice), positions),
-            None => Mask::all(positions.len()),
+    ///
+    /// `previous` is the mask of this layer on an earlier input: a mask that does not
+    /// depend on the input (no volumes: the area, or every vertex, with weight 1) is shared
+    /// from it when it has as many vertices to cover.
+    fn bind(
+        &self,
+        positions: &[Vec3],
+        topology: &Topology,
+        previous: Option<&Arc<Mask>>,
+    ) -> Result<LayerBinding> {
+        let fixed = self
+            .layer
+            .influence
+            .as_ref()
+            .is_none_or(|inf| inf.volumes.is_empty());
+        let mask = match previous {
+            Some(m)
+                if fixed
+                    && m.indices
+                        .last()
+                        .is_none_or(|&i| (i as usize) < positions.len()) =>
+            {
+                Arc::clone(m)
+            }
+            _ => Arc::new(match &self.layer.influence {
+                Some(inf) => inf.mask_in(self.area.as_deref().map(Vec::as_slice), positions),
+                None => Mask::all(positions.len()),
+            }),
         };
         Ok(LayerBinding::bind_masked(
             &self.layer.tool,
@@ -606,7 +630,7 @@ impl MeshEvaluator {
         let r = self.layers.get(k)?;
         let mut w = vec![0.0_f32; self.positions.len()];
         let mask = match self.stages.iter().find(|s| s.index == k) {
-            Some(stage) => Some(stage.binding.mask.clone()),
+            Some(stage) => Some(Mask::clone(&stage.binding.mask)),
             None if r.layer.enabled && r.layer.weight != 0.0 => {
                 let input = self.input_of(k);
                 Some(match &r.full().influence {
@@ -791,7 +815,11 @@ impl MeshEvaluator {
                 self.stages.push(stage);
                 continue;
             }
-            let binding = r.bind(&self.positions, rest.topology())?;
+            let binding = r.bind(
+                &self.positions,
+                rest.topology(),
+                matched.as_ref().map(|s| &s.binding.mask),
+            )?;
             if let Some(mut stage) = matched.take_if(|o| same_binding(&o.binding, &binding)) {
                 refresh(&mut self.positions, &mut self.dirty, &mut stage, &r.layer)?;
                 evaluated += 1;
@@ -817,7 +845,12 @@ impl MeshEvaluator {
             };
             evaluated += 1;
             match &matched {
-                Some(o) if o.indices() == stage.indices() => self.dirty.settle_same(o, &stage),
+                Some(o)
+                    if Arc::ptr_eq(&o.binding.mask, &stage.binding.mask)
+                        || o.indices() == stage.indices() =>
+                {
+                    self.dirty.settle_same(o, &stage)
+                }
                 Some(o) => {
                     self.dirty.advance_old(o);
                     self.dirty.advance_new(&stage);
@@ -996,13 +1029,14 @@ fn same_binding(old: &LayerBinding, new: &LayerBinding) -> bool {
         _ => false,
     };
     same_bind
-        && old.mask.indices == new.mask.indices
-        && old
-            .mask
-            .weights
-            .iter()
-            .zip(&new.mask.weights)
-            .all(|(a, b)| a.to_bits() == b.to_bits())
+        && (Arc::ptr_eq(&old.mask, &new.mask)
+            || (old.mask.indices == new.mask.indices
+                && old
+                    .mask
+                    .weights
+                    .iter()
+                    .zip(&new.mask.weights)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())))
 }
 
 /// Evaluates a matched stage whose binding is unchanged (see [`same_binding`]) on the
