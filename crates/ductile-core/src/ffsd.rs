@@ -565,15 +565,22 @@ impl FfsdTool {
 /// are searched in one parallel pass over chunks whose winners are combined in order with
 /// the same strict comparison, so the result is the serial one.
 fn closest(positions: &[Vec3], active: &[u32], xs: &[Vec3]) -> Vec<u32> {
-    // One sweep over the chunk for all points (each vertex is read once).
+    // One sweep over the chunk for all points, a lane group of vertices at a time: the
+    // distances `|V − X|²` (glam's `distance_squared` arithmetic) of the group, and only
+    // when one beats the best so far, the group's lanes in order with the same strict test.
+    let centres: Vec<Lanes3> = xs.iter().map(|&x| Lanes3::splat(x)).collect();
     let search = |chunk: &[u32]| -> Vec<(u32, f32)> {
         let mut best = vec![(chunk[0], f32::INFINITY); xs.len()];
-        for &i in chunk {
-            let p = positions[i as usize];
-            for (b, &x) in best.iter_mut().zip(xs) {
-                let d = p.distance_squared(x);
-                if d < b.1 {
-                    *b = (i, d);
+        for group in chunk.chunks(LANES) {
+            let v = Lanes3::gather(positions, group);
+            for (b, c) in best.iter_mut().zip(&centres) {
+                let d = v.sub(*c).length_squared();
+                if d.simd_lt(Lane::splat(b.1)).any() {
+                    for (&i, &d) in group.iter().zip(d.as_array()) {
+                        if d < b.1 {
+                            *b = (i, d);
+                        }
+                    }
                 }
             }
         }
