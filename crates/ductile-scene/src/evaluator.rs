@@ -59,7 +59,8 @@ use crate::resolve::resolve_area;
 /// patched by parallel sweeps over every triangle and vertex rather than by following each
 /// changed vertex (both give the same bits). Measured on the head split 5×5 (221k
 /// vertices): one nose slider moves ~30 % of the vertices and takes 4.5 ms with 3, 2.9 ms
-/// with 6 to 16.
+/// with 6 to 16. Meshes under [`PARALLEL_THRESHOLD`] vertices are always patched vertex by
+/// vertex (waking the thread pool costs more there).
 const OUTPUT_FULL_DIVISOR: usize = 8;
 
 /// What one [`MeshEvaluator::update`] did.
@@ -909,7 +910,10 @@ impl MeshEvaluator {
         let triangles = &topology.triangles;
         let positions = &self.positions;
         let faces = &mut self.faces;
-        if faces.len() == triangles.len() && moved.len() * OUTPUT_FULL_DIVISOR > positions.len() {
+        if faces.len() == triangles.len()
+            && positions.len() >= PARALLEL_THRESHOLD
+            && moved.len() * OUTPUT_FULL_DIVISOR > positions.len()
+        {
             // Many moved vertices: sweeps in order (and in parallel) instead of following
             // each moved vertex. A triangle with a moved corner gets a new face normal and
             // marks its corners, whose welded normals are then summed again; every stored
