@@ -16,8 +16,16 @@ mod common;
 
 /// Normal dependencies `ductile-core` may have: math, serialisation, errors, parallelism, and
 /// the numeric/graph crates its solvers use (faer for linear algebra, petgraph for the
-/// sketch tool's minimum cut).
-const CORE_ALLOWED: &[&str] = &["glam", "serde", "thiserror", "rayon", "faer", "petgraph"];
+/// sketch tool's minimum cut, wide for the FFSD kernel's SIMD lanes).
+const CORE_ALLOWED: &[&str] = &[
+    "glam",
+    "serde",
+    "thiserror",
+    "rayon",
+    "faer",
+    "petgraph",
+    "wide",
+];
 /// Dependencies the pure crates (core, scene) must never have.
 const PURE_FORBIDDEN: &[&str] = &["bevy", "egui", "bevy_egui", "gltf", "ron"];
 /// Engine and UI crates.
