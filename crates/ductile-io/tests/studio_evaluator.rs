@@ -28,12 +28,18 @@ fn set_macro(doc: &mut Document, node: &str, value: f32) {
     }
 }
 
+/// The shipped identikit demo and its head.
+fn demo_and_head() -> (Document, RestMesh) {
+    let doc = ductile_io::read_scene(root().join("scenes/identikit-demo.ron")).unwrap();
+    let path = root().join("assets/meshes/lee-perry-smith-head.glb");
+    let head =
+        ductile_io::load_rest_mesh(&ductile_io::MeshRef::parse(path.to_str().unwrap())).unwrap();
+    (doc, head)
+}
+
 #[test]
 fn identikit_demo_edits_match_a_fresh_evaluation() {
-    let mut doc = ductile_io::read_scene(root().join("scenes/identikit-demo.ron")).unwrap();
-    let path = root().join("assets/meshes/lee-perry-smith-head.glb");
-    let rest: RestMesh =
-        ductile_io::load_rest_mesh(&ductile_io::MeshRef::parse(path.to_str().unwrap())).unwrap();
+    let (mut doc, rest) = demo_and_head();
     let mut ev = MeshEvaluator::new("head", rest.clone());
     let first = ev.update(&doc).unwrap();
     assert!(first.changed);
@@ -72,10 +78,7 @@ fn identikit_demo_edits_match_a_fresh_evaluation() {
 /// for the parallel paths (mask, bind, the one-pass application, the output patch) to run.
 #[test]
 fn split_head_edits_match_a_fresh_evaluation() {
-    let mut doc = ductile_io::read_scene(root().join("scenes/identikit-demo.ron")).unwrap();
-    let path = root().join("assets/meshes/lee-perry-smith-head.glb");
-    let head: RestMesh =
-        ductile_io::load_rest_mesh(&ductile_io::MeshRef::parse(path.to_str().unwrap())).unwrap();
+    let (mut doc, head) = demo_and_head();
     let rest = RestMesh::new(
         ductile_core::primitives::subdivided_n(head.mesh(), 3),
         "head split 3×3",

@@ -462,6 +462,20 @@ fn vertex_normal(v: u32, links: &Links, faces: &[Vec3]) -> Vec3 {
     acc.try_normalize().unwrap_or(Vec3::Z)
 }
 
+/// Every stored vertex `s` of `out` takes the welded position and normal of `weld[s]` (in
+/// parallel chunks).
+fn write_stored(out: &mut Deformed, weld: &[u32], positions: &[Vec3], normals: &[Vec3]) {
+    out.positions
+        .par_iter_mut()
+        .zip(out.normals.par_iter_mut())
+        .zip(weld.par_iter())
+        .with_min_len(CHUNK)
+        .for_each(|((p, n), &w)| {
+            *p = positions[w as usize];
+            *n = normals[w as usize];
+        });
+}
+
 /// The face normal `(b − a) × (c − a)` of a triangle, as `smooth_normals` computes it.
 #[inline]
 fn face_normal([a, b, c]: [u32; 3], positions: &[Vec3]) -> Vec3 {
@@ -945,16 +959,7 @@ impl MeshEvaluator {
                         *n = vertex_normal(w as u32, links_ref, faces_ref);
                     }
                 });
-            let normals = &self.normals;
-            out.positions
-                .par_iter_mut()
-                .zip(out.normals.par_iter_mut())
-                .zip(topology.weld.par_iter())
-                .with_min_len(CHUNK)
-                .for_each(|((p, n), &w)| {
-                    *p = positions[w as usize];
-                    *n = normals[w as usize];
-                });
+            write_stored(out, &topology.weld, positions, &self.normals);
             for &v in &moved {
                 links.mark[v as usize] = false;
             }
@@ -980,16 +985,7 @@ impl MeshEvaluator {
                 .enumerate()
                 .with_min_len(CHUNK)
                 .for_each(|(v, n)| *n = vertex_normal(v as u32, links, faces));
-            let normals = &*normals;
-            out.positions
-                .par_iter_mut()
-                .zip(out.normals.par_iter_mut())
-                .zip(topology.weld.par_iter())
-                .with_min_len(CHUNK)
-                .for_each(|((p, n), &w)| {
-                    *p = positions[w as usize];
-                    *n = normals[w as usize];
-                });
+            write_stored(out, &topology.weld, positions, normals);
             return true;
         }
         // The triangles around the moved vertices get new face normals (the others keep
