@@ -99,28 +99,26 @@ impl Resolved {
     /// [`LayerBinding::bind`] gives for [`Resolved::full`], without copying the area twice.
     ///
     /// `previous` is the mask of this layer on an earlier input: a mask that does not
-    /// depend on the input (no volumes: the area, or every vertex, with weight 1) is shared
-    /// from it when it has as many vertices to cover.
+    /// depend on the input positions (no volumes: the area, or every vertex, with weight 1)
+    /// is shared from it when it covers the same vertex count.
     fn bind(
         &self,
         positions: &[Vec3],
         topology: &Topology,
         previous: Option<&Arc<Mask>>,
     ) -> Result<LayerBinding> {
+        let n = positions.len();
         let fixed = self
             .layer
             .influence
             .as_ref()
             .is_none_or(|inf| inf.volumes.is_empty());
+        let same_count = |m: &Mask| match &self.area {
+            Some(_) => m.indices.last().is_none_or(|&i| (i as usize) < n),
+            None => m.len() == n,
+        };
         let mask = match previous {
-            Some(m)
-                if fixed
-                    && m.indices
-                        .last()
-                        .is_none_or(|&i| (i as usize) < positions.len()) =>
-            {
-                Arc::clone(m)
-            }
+            Some(m) if fixed && same_count(m) => Arc::clone(m),
             _ => Arc::new(match &self.layer.influence {
                 Some(inf) => inf.mask_in(self.area.as_deref().map(Vec::as_slice), positions),
                 None => Mask::all(positions.len()),
