@@ -509,7 +509,7 @@ pub struct MeshEvaluator {
     /// Face normals `(b − a) × (c − a)` of the output's welded triangles; empty when not
     /// known (they are rebuilt with the next full output).
     faces: Vec<Vec3>,
-    /// The output's welded normals; valid whenever `faces` is (patched with it).
+    /// Scratch space for the welded normals of a full output rebuild.
     normals: Vec<Vec3>,
     dirty: Dirty,
     /// How many stages were refreshed (see [`refresh`]) since the evaluator was made.
@@ -928,8 +928,8 @@ impl MeshEvaluator {
         {
             // Many moved vertices: sweeps in order (and in parallel) instead of following
             // each moved vertex. A triangle with a moved corner gets a new face normal and
-            // marks its corners, whose welded normals are then summed again; every stored
-            // vertex copies its welded position and normal.
+            // marks its corners; every stored copy of a moved or marked vertex takes its
+            // position and sums its normal again.
             for &v in &moved {
                 links.mark[v as usize] = true;
             }
@@ -947,17 +947,23 @@ impl MeshEvaluator {
                     }
                 });
             let (links_ref, faces_ref) = (&*links, &*faces);
-            self.normals
+            out.positions
                 .par_iter_mut()
-                .zip(links_ref.around.par_iter())
-                .enumerate()
+                .zip(out.normals.par_iter_mut())
+                .zip(topology.weld.par_iter())
                 .with_min_len(CHUNK)
-                .for_each(|(w, (n, a))| {
-                    if a.swap(false, Ordering::Relaxed) {
-                        *n = vertex_normal(w as u32, links_ref, faces_ref);
+                .for_each(|((p, n), &w)| {
+                    let wi = w as usize;
+                    if links_ref.mark[wi] || links_ref.around[wi].load(Ordering::Relaxed) {
+                        *p = positions[w as usize];
+                        *n = vertex_normal(w, links_ref, faces_ref);
                     }
                 });
-            write_stored(out, &topology.weld, positions, &self.normals);
+            links
+                .around
+                .par_iter()
+                .with_min_len(CHUNK)
+                .for_each(|a| a.store(false, Ordering::Relaxed));
             for &v in &moved {
                 links.mark[v as usize] = false;
             }
@@ -1022,7 +1028,6 @@ impl MeshEvaluator {
             around.iter().map(normal).collect()
         };
         for (&v, &n) in around.iter().zip(&normals) {
-            self.normals[v as usize] = n;
             for &s in links.copies_of(v) {
                 out.normals[s as usize] = n;
             }
