@@ -126,6 +126,7 @@ fn studio(c: &mut Criterion) {
     let first = |d: &mut Document, f: bool| set_macro(d, "chin-cleft", if f { 0.3 } else { 0.5 });
 
     let zero_221k = zero.clone();
+    let zero_318k = zero.clone();
     bench_edit(c, "slider/identikit-head", zero, &rest, |d, f| {
         set_macro(d, "nose-length", if f { 0.4 } else { 0.5 });
     });
@@ -183,6 +184,15 @@ fn studio(c: &mut Criterion) {
     eprintln!(
         "split 6×6: {} welded vertices",
         bigger.welded_positions().len()
+    );
+    bench_edit(
+        c,
+        "slider/identikit-head/head-318k",
+        zero_318k,
+        &bigger,
+        |d, f| {
+            set_macro(d, "nose-length", if f { 0.4 } else { 0.5 });
+        },
     );
     bench_edit(c, "slider/head-318k/middle", demo, &bigger, middle);
     bench_edit(c, "slider/head-318k/first", demo_first_318k, &bigger, first);
