@@ -237,25 +237,21 @@ impl Lanes3 {
 
     /// The positions of `active` (up to a lane group; the last one repeated to fill the lanes).
     fn gather(positions: &[Vec3], active: &[u32]) -> Self {
-        let (mut x, mut y, mut z) = ([0.0_f32; LANES], [0.0_f32; LANES], [0.0_f32; LANES]);
-        let last = active.len() - 1;
-        for j in 0..LANES {
-            let v = positions[active[j.min(last)] as usize];
-            (x[j], y[j], z[j]) = (v.x, v.y, v.z);
-        }
-        Self {
-            x: Lane::new(x),
-            y: Lane::new(y),
-            z: Lane::new(z),
-        }
+        Self::fill(active.len(), |j| positions[active[j] as usize])
     }
 
     /// Up to a lane group of points (the last one repeated to fill the lanes).
     fn load(points: &[Vec3]) -> Self {
+        Self::fill(points.len(), |j| points[j])
+    }
+
+    /// Lanes `point(0)`, …, `point(count − 1)`, then `point(count − 1)` repeated
+    /// (`1 ≤ count`).
+    #[inline]
+    fn fill(count: usize, point: impl Fn(usize) -> Vec3) -> Self {
         let (mut x, mut y, mut z) = ([0.0_f32; LANES], [0.0_f32; LANES], [0.0_f32; LANES]);
-        let last = points.len() - 1;
         for j in 0..LANES {
-            let v = points[j.min(last)];
+            let v = point(j.min(count - 1));
             (x[j], y[j], z[j]) = (v.x, v.y, v.z);
         }
         Self {

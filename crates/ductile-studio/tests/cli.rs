@@ -16,7 +16,11 @@ fn studio(args: &[&str]) -> Output {
         .unwrap()
 }
 
-fn stderr(out: &Output) -> String {
+/// Runs the Studio with `args`, checks that it refuses them, and returns what it printed on
+/// stderr.
+fn refused(args: &[&str]) -> String {
+    let out = studio(args);
+    assert!(!out.status.success(), "{args:?} was accepted");
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
@@ -36,9 +40,7 @@ fn help_lists_the_options_and_credits_the_head() {
 
 #[test]
 fn a_missing_scene_is_refused_with_its_path() {
-    let out = studio(&["--scene", "no/such/scene.ron"]);
-    assert!(!out.status.success());
-    let err = stderr(&out);
+    let err = refused(&["--scene", "no/such/scene.ron"]);
     assert!(err.contains("no/such/scene.ron"), "{err}");
 }
 
@@ -47,9 +49,7 @@ fn a_malformed_scene_is_refused_with_its_path_and_place() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("broken.ron");
     std::fs::write(&path, "(\n    version: 1,\n    nodes: [ (name: 3) ],\n)\n").unwrap();
-    let out = studio(&["--scene", path.to_str().unwrap()]);
-    assert!(!out.status.success());
-    let err = stderr(&out);
+    let err = refused(&["--scene", path.to_str().unwrap()]);
     assert!(
         err.contains("broken.ron:3:"),
         "the error names the file and line: {err}"
@@ -58,17 +58,13 @@ fn a_malformed_scene_is_refused_with_its_path_and_place() {
 
 #[test]
 fn a_bad_window_size_is_refused() {
-    let out = studio(&["--size", "10x10"]);
-    assert!(!out.status.success());
-    let err = stderr(&out);
+    let err = refused(&["--size", "10x10"]);
     assert!(err.contains("10x10") && err.contains("200..=8192"), "{err}");
 }
 
 #[test]
 fn a_screenshot_into_a_missing_directory_is_refused_before_the_window() {
-    let out = studio(&["--screenshot", "/no/such/dir/out.png"]);
-    assert!(!out.status.success());
-    let err = stderr(&out);
+    let err = refused(&["--screenshot", "/no/such/dir/out.png"]);
     assert!(err.contains("/no/such/dir"), "{err}");
 }
 
@@ -76,7 +72,6 @@ fn a_screenshot_into_a_missing_directory_is_refused_before_the_window() {
 fn a_screenshot_must_be_a_png() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("out.jpg");
-    let out = studio(&["--screenshot", path.to_str().unwrap()]);
-    assert!(!out.status.success());
-    assert!(stderr(&out).contains(".png"), "{}", stderr(&out));
+    let err = refused(&["--screenshot", path.to_str().unwrap()]);
+    assert!(err.contains(".png"), "{err}");
 }
