@@ -112,6 +112,7 @@ fn golden_final() -> Document {
             ),
         ],
         macros,
+        ..Document::default()
     }
 }
 

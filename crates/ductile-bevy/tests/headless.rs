@@ -63,6 +63,7 @@ fn document() -> Document {
             node("pull-b", NodeKind::Tool(pull(-0.3))),
         ],
         macros: Default::default(),
+        ..Document::default()
     }
 }
 

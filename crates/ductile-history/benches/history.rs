@@ -83,6 +83,7 @@ fn identikit_document() -> Document {
     Document {
         nodes: file.nodes,
         macros: file.macros,
+        ..Document::default()
     }
 }
 

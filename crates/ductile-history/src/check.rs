@@ -338,7 +338,8 @@ pub(crate) fn check_new_node(doc: &Document, index: usize, node: &Node) -> Resul
 }
 
 /// The first place that refers to node `name` by name (a child's parent, a layer's tool, a
-/// layer's influence volume), described for messages.
+/// layer's influence volume, an animation track, a variant's state), described for
+/// messages.
 pub(crate) fn first_reference(doc: &Document, name: &str) -> Option<String> {
     for n in &doc.nodes {
         if n.parent.as_deref() == Some(name) {
@@ -356,6 +357,18 @@ pub(crate) fn first_reference(doc: &Document, name: &str) -> Option<String> {
                 }
             }
         }
+    }
+    if let Some(tracks) = doc.animation.tracks.get(name)
+        && let Some(param) = tracks.keys().next()
+    {
+        return Some(format!("animation track '{name}' / '{param}'"));
+    }
+    if let Some(v) = doc
+        .variants
+        .iter()
+        .find(|(_, v)| v.states.contains_key(name))
+    {
+        return Some(format!("variant '{}'", v.0));
     }
     None
 }

@@ -31,8 +31,8 @@ impl Operation {
     }
 
     /// A group that removes node `name`, its whole subtree (deepest first), every layer whose
-    /// tool is one of the removed nodes, and every reference to a removed volume from layer
-    /// influences.
+    /// tool is one of the removed nodes, every reference to a removed volume from layer
+    /// influences, the removed nodes' animation tracks and their states in variants.
     pub fn remove_node_and_references(doc: &Document, name: &str) -> Result<Self> {
         node_index(doc, name)?;
         // Work on a scratch copy so that each generated operation sees the state left by
@@ -82,6 +82,35 @@ impl Operation {
                 } else {
                     index += 1;
                     continue;
+                };
+                op.apply(&mut scratch)?;
+                ops.push(op);
+            }
+        }
+        // Tracks of the removed nodes, and their states in variants.
+        for doomed_name in &doomed {
+            let params: Vec<String> = scratch
+                .animation
+                .tracks
+                .get(doomed_name)
+                .map(|t| t.keys().cloned().collect())
+                .unwrap_or_default();
+            for param in params {
+                let op = Operation::set_track(&scratch, doomed_name, &param, None);
+                op.apply(&mut scratch)?;
+                ops.push(op);
+            }
+        }
+        let variants: Vec<String> = scratch.variants.keys().cloned().collect();
+        for v in variants {
+            let old = scratch.variants[&v].clone();
+            let mut new = old.clone();
+            new.states.retain(|n, _| !doomed.contains(n));
+            if new != old {
+                let op = Operation::SetVariant {
+                    name: v,
+                    old: Some(old),
+                    new: Some(new),
                 };
                 op.apply(&mut scratch)?;
                 ops.push(op);

@@ -257,6 +257,7 @@ mod tests {
                 kind: NodeKind::Group,
             }],
             macros: Default::default(),
+            ..Document::default()
         }
     }
 

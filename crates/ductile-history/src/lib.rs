@@ -14,6 +14,8 @@ pub mod edits;
 pub mod error;
 pub mod history;
 pub mod operation;
+pub mod time_edits;
+mod time_ops;
 
 /// The types most users need.
 pub mod prelude {

@@ -24,6 +24,7 @@
 //! operation produced (the `new` values are there, indices exist, names are free): it
 //! restores exactly what was there before, even where the base document had problems.
 
+use ductile_anim::key::Key;
 use ductile_core::ffsd::FfsdMacro;
 use ductile_core::influence::Shape;
 use ductile_core::tool::Tool;
@@ -36,6 +37,7 @@ use crate::check::{
     in_range, mesh_at, mesh_mut, node_index, same, wrong_kind,
 };
 use crate::error::{HistoryError, Result};
+use crate::time_ops;
 
 /// One undoable edit of a scene document. Node, mesh, area and macro references are by name
 /// (names are unique in a document); layer positions are 0 = bottom of the stack.
@@ -190,6 +192,67 @@ pub enum Operation {
         /// Definition after (`None`: the macro is deleted).
         new: Option<FfsdMacro>,
     },
+    /// Sets, changes or deletes the key at `time` of node `node`'s channel `param`. Setting a
+    /// key on a channel without a track makes the track; deleting its last key removes it.
+    SetKey {
+        /// The animated node.
+        node: String,
+        /// The channel's path (see `docs/scene-format.md`, "Animation").
+        param: String,
+        /// The key's time in seconds (both keys, when present, are at this time).
+        time: f32,
+        /// The key before (`None`: there was none at `time`).
+        old: Option<Key>,
+        /// The key after (`None`: deleted).
+        new: Option<Key>,
+    },
+    /// Moves the key at `from` to `to` (no key may be at `to`), keeping its value and
+    /// interpolation.
+    MoveKey {
+        /// The animated node.
+        node: String,
+        /// The channel's path.
+        param: String,
+        /// Time before (seconds).
+        from: f32,
+        /// Time after (seconds, finite).
+        to: f32,
+    },
+    /// Sets, replaces or removes (`new: None`) a whole track.
+    SetTrack {
+        /// The animated node.
+        node: String,
+        /// The channel's path.
+        param: String,
+        /// The keys before (`None`: no track).
+        old: Option<Vec<Key>>,
+        /// The keys after (`None`: no track).
+        new: Option<Vec<Key>>,
+    },
+    /// Sets the timeline's frame rate and frame range.
+    SetTimeline {
+        /// Settings before.
+        old: Timeline,
+        /// Settings after (fps finite and > 0, start ≤ end).
+        new: Timeline,
+    },
+    /// Saves, overwrites or deletes (`new: None`) a named variant.
+    SetVariant {
+        /// The variant's name.
+        name: String,
+        /// The variant before (`None`: there was none).
+        old: Option<Variant>,
+        /// The variant after (`None`: deleted). Its nodes must exist and be of the kinds
+        /// it holds.
+        new: Option<Variant>,
+    },
+    /// Renames a variant.
+    RenameVariant {
+        /// Current name.
+        old: String,
+        /// New name: non-empty, not used by another variant.
+        new: String,
+    },
     /// Several operations as one step: applied in order, undone in reverse order, all or
     /// nothing.
     Group {
@@ -328,6 +391,48 @@ impl Operation {
                 old: new,
                 new: old,
             },
+            O::SetKey {
+                node,
+                param,
+                time,
+                old,
+                new,
+            } => O::SetKey {
+                node,
+                param,
+                time,
+                old: new,
+                new: old,
+            },
+            O::MoveKey {
+                node,
+                param,
+                from,
+                to,
+            } => O::MoveKey {
+                node,
+                param,
+                from: to,
+                to: from,
+            },
+            O::SetTrack {
+                node,
+                param,
+                old,
+                new,
+            } => O::SetTrack {
+                node,
+                param,
+                old: new,
+                new: old,
+            },
+            O::SetTimeline { old, new } => O::SetTimeline { old: new, new: old },
+            O::SetVariant { name, old, new } => O::SetVariant {
+                name,
+                old: new,
+                new: old,
+            },
+            O::RenameVariant { old, new } => O::RenameVariant { old: new, new: old },
             O::Group { label, ops } => O::Group {
                 label,
                 ops: ops.iter().rev().map(Operation::inverse).collect(),
@@ -379,6 +484,43 @@ impl Operation {
                 Some(_) => format!("define macro '{name}'"),
                 None => format!("delete macro '{name}'"),
             },
+            O::SetKey {
+                node,
+                param,
+                time,
+                old,
+                new,
+            } => match (old, new) {
+                (None, Some(_)) => format!("key '{node}' {param} at {time} s"),
+                (Some(_), None) => format!("delete key of '{node}' {param} at {time} s"),
+                (Some(a), Some(b)) if a.value == b.value => format!(
+                    "set interpolation of '{node}' {param} at {time} s to {}",
+                    b.interpolation.name()
+                ),
+                _ => format!("set key '{node}' {param} at {time} s"),
+            },
+            O::MoveKey {
+                node,
+                param,
+                from,
+                to,
+            } => format!("move key of '{node}' {param} from {from} s to {to} s"),
+            O::SetTrack {
+                node, param, new, ..
+            } => match new {
+                Some(k) => format!("set track '{node}' {param} ({} keys)", k.len()),
+                None => format!("delete track '{node}' {param}"),
+            },
+            O::SetTimeline { new, .. } => format!(
+                "set timeline to frames {}–{} at {} fps",
+                new.start, new.end, new.fps
+            ),
+            O::SetVariant { name, old, new } => match (old, new) {
+                (None, Some(_)) => format!("save variant '{name}'"),
+                (Some(_), Some(_)) => format!("update variant '{name}'"),
+                (_, None) => format!("delete variant '{name}'"),
+            },
+            O::RenameVariant { old, new } => format!("rename variant '{old}' to '{new}'"),
             O::Group { label, .. } => label.clone(),
         }
     }
@@ -457,6 +599,37 @@ impl Operation {
                 O::SetMacroDefinition { name: a, new, .. },
                 O::SetMacroDefinition { name: b, old, .. },
             ) => a == b && new == old,
+            (
+                O::SetKey {
+                    node: a,
+                    param: p,
+                    time: t,
+                    new,
+                    ..
+                },
+                O::SetKey {
+                    node: b,
+                    param: q,
+                    time: u,
+                    old,
+                    ..
+                },
+            ) => a == b && p == q && t == u && new.is_some() && new == old,
+            (
+                O::MoveKey {
+                    node: a,
+                    param: p,
+                    to,
+                    ..
+                },
+                O::MoveKey {
+                    node: b,
+                    param: q,
+                    from,
+                    ..
+                },
+            ) => a == b && p == q && to == from,
+            (O::SetTimeline { new, .. }, O::SetTimeline { old, .. }) => new == old,
             (O::Group { ops: a, .. }, O::Group { ops: b, .. }) => {
                 a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.can_merge(y))
             }
@@ -484,6 +657,9 @@ impl Operation {
             (O::SetMacroDefinition { new, .. }, O::SetMacroDefinition { new: n, .. }) => {
                 new.clone_from(n)
             }
+            (O::SetKey { new, .. }, O::SetKey { new: n, .. }) => new.clone_from(n),
+            (O::MoveKey { to, .. }, O::MoveKey { to: n, .. }) => *to = *n,
+            (O::SetTimeline { new, .. }, O::SetTimeline { new: n, .. }) => *new = *n,
             (O::Group { ops, .. }, O::Group { ops: n, .. }) => {
                 for (a, b) in ops.iter_mut().zip(n) {
                     a.merge(b);
@@ -748,6 +924,61 @@ impl Operation {
                     }
                 }
                 Ok(())
+            }
+            O::SetKey {
+                node,
+                param,
+                time,
+                old,
+                new,
+            } => {
+                let (expected, target) = dir.pick(old, new);
+                time_ops::set_key(
+                    doc,
+                    node,
+                    param,
+                    *time,
+                    expected.as_ref(),
+                    target.as_ref(),
+                    fwd,
+                )
+            }
+            O::MoveKey {
+                node,
+                param,
+                from,
+                to,
+            } => {
+                let (from, to) = dir.pick(from, to);
+                time_ops::move_key(doc, node, param, *from, *to)
+            }
+            O::SetTrack {
+                node,
+                param,
+                old,
+                new,
+            } => {
+                let (expected, target) = dir.pick(old, new);
+                time_ops::set_track(
+                    doc,
+                    node,
+                    param,
+                    expected.as_deref(),
+                    target.as_deref(),
+                    fwd,
+                )
+            }
+            O::SetTimeline { old, new } => {
+                let (expected, target) = dir.pick(old, new);
+                time_ops::set_timeline(doc, expected, target, fwd)
+            }
+            O::SetVariant { name, old, new } => {
+                let (expected, target) = dir.pick(old, new);
+                time_ops::set_variant(doc, name, expected.as_ref(), target.as_ref(), fwd)
+            }
+            O::RenameVariant { old, new } => {
+                let (from, to) = dir.pick(old, new);
+                time_ops::rename_variant(doc, from, to)
             }
             O::Group { label, ops } => run_group(doc, label, ops, dir),
         }

@@ -8,7 +8,9 @@ use ductile_core::tool::Tool;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SceneError};
+use crate::time::Animation;
 use crate::transform::Transform;
+use crate::variant::Variant;
 
 /// A whole scene: the node graph and the macro library. This is the single source of truth
 /// that history operations edit and that every view (CLI, Studio) reads.
@@ -25,6 +27,12 @@ pub struct Document {
     /// The macro library, by name.
     #[serde(default)]
     pub macros: BTreeMap<String, FfsdMacro>,
+    /// Keyframe tracks and the timeline (not written when it is the default, empty one).
+    #[serde(default, skip_serializing_if = "Animation::is_default")]
+    pub animation: Animation,
+    /// Named variants: snapshots of the tools' states (the identikit's suspects), by name.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub variants: BTreeMap<String, Variant>,
 }
 
 /// A node of the scene graph.
@@ -264,7 +272,8 @@ impl Document {
     }
 
     /// Renames a node and every reference to it (children's parents, layer tools, influence
-    /// volumes). Fails when `old` does not exist or `new` is taken or empty.
+    /// volumes, its keyframe tracks, its state in every variant). Fails when `old` does not
+    /// exist or `new` is taken or empty.
     pub fn rename(&mut self, old: &str, new: &str) -> Result<()> {
         if old == new {
             return self.node(old).map(|_| ());
@@ -296,6 +305,14 @@ impl Document {
                         inf.volumes.iter_mut().for_each(fix);
                     }
                 }
+            }
+        }
+        if let Some(tracks) = self.animation.tracks.remove(old) {
+            self.animation.tracks.insert(new.to_owned(), tracks);
+        }
+        for v in self.variants.values_mut() {
+            if let Some(state) = v.states.remove(old) {
+                v.states.insert(new.to_owned(), state);
             }
         }
         Ok(())

@@ -1,5 +1,6 @@
 //! The error type of `ductile-scene`.
 
+use ductile_anim::error::AnimError;
 use ductile_core::error::CoreError;
 use thiserror::Error;
 
@@ -107,6 +108,50 @@ pub enum SceneError {
     /// A parameter is invalid according to `ductile-core`.
     #[error(transparent)]
     Core(#[from] CoreError),
+    /// A node's animatable parameter cannot be read or written (no such parameter, a
+    /// value of the wrong kind).
+    #[error("node '{node}': {source}")]
+    Channel {
+        /// The node.
+        node: String,
+        /// What is wrong.
+        source: AnimError,
+    },
+    /// A keyframe track is invalid.
+    #[error("animation track '{node}' / '{param}': {problem}")]
+    Track {
+        /// The node the track animates.
+        node: String,
+        /// The parameter's path.
+        param: String,
+        /// What is wrong.
+        problem: String,
+    },
+    /// The timeline (frame rate, frame range) is invalid, or a frame is outside it.
+    #[error("timeline: {problem}")]
+    Timeline {
+        /// What is wrong.
+        problem: String,
+    },
+    /// No variant has this name.
+    #[error("there is no variant named '{name}'{}", known_variants(.known))]
+    UnknownVariant {
+        /// The name looked up.
+        name: String,
+        /// The variants there are.
+        known: Vec<String>,
+    },
+    /// A variant is invalid, or variants cannot be blended.
+    #[error("variant '{variant}': {problem}")]
+    Variant {
+        /// The variant (or the blended variants, joined by '+').
+        variant: String,
+        /// What is wrong, naming the node.
+        problem: String,
+    },
+    /// Blending or random-variant settings are invalid.
+    #[error("{0}")]
+    Blend(#[from] AnimError),
     /// A node has no handle with this id (see `handles::handles`).
     #[error("node '{node}' has no handle {handle}")]
     NoSuchHandle {
@@ -115,6 +160,14 @@ pub enum SceneError {
         /// The handle id as printed.
         handle: String,
     },
+}
+
+fn known_variants(known: &[String]) -> String {
+    if known.is_empty() {
+        " (the scene has no variants)".to_owned()
+    } else {
+        format!(" (variants: {})", known.join(", "))
+    }
 }
 
 /// Shorthand for results in this crate.

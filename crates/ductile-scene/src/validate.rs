@@ -10,7 +10,8 @@ use crate::error::SceneError;
 impl Document {
     /// Every problem of the document that can be found without loading meshes: names,
     /// parents and cycles, finite transforms, layer references (tools, volumes, areas),
-    /// macro references, and every tool, volume, influence and macro parameter.
+    /// macro references, every tool, volume, influence and macro parameter, the timeline,
+    /// every keyframe track and every variant.
     #[must_use]
     pub fn problems(&self) -> Vec<SceneError> {
         let mut out = Vec::new();
@@ -76,6 +77,8 @@ impl Document {
                 });
             }
         }
+        self.animation_problems(&mut out);
+        self.variant_problems(&mut out);
         out
     }
 

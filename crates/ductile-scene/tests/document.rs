@@ -58,6 +58,7 @@ fn doc() -> Document {
             },
         ],
         macros: Default::default(),
+        ..Document::default()
     }
 }
 

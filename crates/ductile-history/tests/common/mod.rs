@@ -119,6 +119,7 @@ pub fn scene() -> Document {
             node("grp", None, NodeKind::Group),
         ],
         macros,
+        ..Document::default()
     }
 }
 

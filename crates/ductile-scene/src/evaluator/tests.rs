@@ -204,6 +204,7 @@ fn scene() -> Document {
             node("unrelated", None, NodeKind::Group),
         ],
         macros,
+        ..Document::default()
     }
 }
 
