@@ -238,7 +238,7 @@ pub enum IoError {
 }
 
 /// The scene format versions this build reads.
-pub const SUPPORTED_VERSIONS: &[u64] = &[1];
+pub const SUPPORTED_VERSIONS: &[u64] = &[1, 2];
 
 fn list(versions: &[u64]) -> String {
     versions

@@ -16,11 +16,13 @@ use crate::error::{IoError, Result};
 use crate::scene::{LoadedScene, load_node_mesh, read_scene, scene_dir};
 use crate::write_atomic;
 
-/// The history format version [`save_history`] writes.
-pub const HISTORY_VERSION: u64 = 1;
+/// The history format version [`save_history`] writes. Version 2 added the time
+/// operations (keys, tracks, timeline, variants) and the animation and variants of an
+/// inline base; a version 1 file is read with the same layout (it cannot hold them).
+pub const HISTORY_VERSION: u64 = 2;
 
 /// The history format versions this build reads.
-pub const SUPPORTED_HISTORY_VERSIONS: &[u64] = &[1];
+pub const SUPPORTED_HISTORY_VERSIONS: &[u64] = &[1, 2];
 
 /// Where a history's base document comes from.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -38,7 +40,8 @@ pub enum Base {
     },
 }
 
-/// The on-disk layout of version 1.
+/// The on-disk layout of versions 1 and 2 (2 may hold the time operations; the layout is
+/// the same).
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct HistoryV1 {
@@ -152,7 +155,7 @@ pub fn parse_history(text: &str, path: &Path) -> Result<LoadedHistory> {
             path: path.to_owned(),
         })?;
     let file: HistoryV1 = match version {
-        1 => opts.from_str(text).map_err(|e| ron_error(path, &e))?,
+        1 | 2 => opts.from_str(text).map_err(|e| ron_error(path, &e))?,
         found => {
             return Err(IoError::UnsupportedHistoryVersion {
                 path: path.to_owned(),

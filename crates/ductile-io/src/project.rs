@@ -673,7 +673,13 @@ fn op_sources(op: &mut Operation, f: &mut impl FnMut(&mut String)) {
         | Operation::SetLayerWeight { .. }
         | Operation::SetLayerInfluence { .. }
         | Operation::DefineArea { .. }
-        | Operation::SetMacroDefinition { .. } => {}
+        | Operation::SetMacroDefinition { .. }
+        | Operation::SetKey { .. }
+        | Operation::MoveKey { .. }
+        | Operation::SetTrack { .. }
+        | Operation::SetTimeline { .. }
+        | Operation::SetVariant { .. }
+        | Operation::RenameVariant { .. } => {}
     }
 }
 

@@ -7,7 +7,7 @@
 //!    version is reported as such and not as a confusing field error;
 //! 2. the text is parsed with the struct of *that* version, with unknown fields denied;
 //! 3. [`migrate`] lifts an old version's struct to the current [`Document`] one step at a
-//!    time (today there is only version 1, so this is the identity).
+//!    time (version 1 → 2 adds an empty timeline and no variants).
 //!
 //! Writing always produces the current version, pretty-printed, atomically.
 
@@ -17,14 +17,17 @@ use std::path::{Path, PathBuf};
 use ductile_core::ffsd::FfsdMacro;
 use ductile_core::mesh::{Deformed, RestMesh};
 use ductile_scene::document::{Document, Node, NodeKind};
+use ductile_scene::time::Animation;
+use ductile_scene::variant::Variant;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{IoError, Result};
 use crate::mesh::{MeshRef, load_rest_mesh};
 use crate::write_atomic;
 
-/// The version [`save_scene`] writes.
-pub const CURRENT_VERSION: u64 = 1;
+/// The version [`save_scene`] writes. Version 2 added `animation` (keyframe tracks and the
+/// timeline) and `variants`; a version 1 reader would refuse those fields.
+pub const CURRENT_VERSION: u64 = 2;
 
 /// Reads only the `version` field; everything else is skipped.
 #[derive(Deserialize)]
@@ -50,19 +53,50 @@ struct SceneV1 {
     macros: BTreeMap<String, FfsdMacro>,
 }
 
+/// The on-disk layout of version 2: version 1 plus the animation and the variants.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneV2 {
+    #[allow(dead_code)]
+    version: u64,
+    #[serde(default)]
+    nodes: Vec<Node>,
+    #[serde(default)]
+    macros: BTreeMap<String, FfsdMacro>,
+    #[serde(default)]
+    animation: Animation,
+    #[serde(default)]
+    variants: BTreeMap<String, Variant>,
+}
+
 /// What [`save_scene`] writes (borrowing the document).
 #[derive(Serialize)]
 struct SceneOut<'a> {
     version: u64,
     nodes: &'a [Node],
     macros: &'a BTreeMap<String, FfsdMacro>,
+    #[serde(skip_serializing_if = "Animation::is_default")]
+    animation: &'a Animation,
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    variants: &'a BTreeMap<String, Variant>,
+}
+
+/// The parts of a version 1 scene.
+#[derive(Debug)]
+pub struct SceneV1Parts {
+    /// The nodes.
+    pub nodes: Vec<Node>,
+    /// The macro library.
+    pub macros: BTreeMap<String, FfsdMacro>,
 }
 
 /// A scene file parsed in the layout of its own version, before migration.
 #[derive(Debug)]
 pub enum VersionedScene {
-    /// Version 1.
-    V1(Document),
+    /// Version 1: nodes and macros.
+    V1(SceneV1Parts),
+    /// Version 2: the current document.
+    V2(Document),
 }
 
 /// Lifts a scene of any supported version to the current [`Document`].
@@ -72,7 +106,13 @@ pub enum VersionedScene {
 #[must_use]
 pub fn migrate(scene: VersionedScene) -> Document {
     match scene {
-        VersionedScene::V1(doc) => doc,
+        VersionedScene::V1(v1) => migrate(VersionedScene::V2(Document {
+            nodes: v1.nodes,
+            macros: v1.macros,
+            animation: Animation::default(),
+            variants: BTreeMap::new(),
+        })),
+        VersionedScene::V2(doc) => doc,
     }
 }
 
@@ -99,9 +139,18 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Document> {
     let scene = match version {
         1 => {
             let v1: SceneV1 = opts.from_str(text).map_err(|e| ron_error(path, &e))?;
-            VersionedScene::V1(Document {
+            VersionedScene::V1(SceneV1Parts {
                 nodes: v1.nodes,
                 macros: v1.macros,
+            })
+        }
+        2 => {
+            let v2: SceneV2 = opts.from_str(text).map_err(|e| ron_error(path, &e))?;
+            VersionedScene::V2(Document {
+                nodes: v2.nodes,
+                macros: v2.macros,
+                animation: v2.animation,
+                variants: v2.variants,
             })
         }
         found => {
@@ -130,6 +179,8 @@ pub fn scene_to_string(doc: &Document) -> Result<String, ron::Error> {
         version: CURRENT_VERSION,
         nodes: &doc.nodes,
         macros: &doc.macros,
+        animation: &doc.animation,
+        variants: &doc.variants,
     };
     let pretty = ron::ser::PrettyConfig::default();
     ron_options().to_string_pretty(&out, pretty)

@@ -400,3 +400,22 @@ fn a_small_saved_history_reads_as_documented() {
     assert!(q.redo().unwrap());
     assert!(!q.document().mesh("t").unwrap().stack[0].enabled);
 }
+
+/// A history file of version 1 (before keys and variants existed) still opens, at its
+/// cursor, with the same document as its version 2 twin.
+#[test]
+fn a_version_1_history_still_opens() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = normalize(dir.path());
+    std::fs::write(root.join("tetra.obj"), TETRA_OBJ).unwrap();
+    for (name, text) in [
+        ("v1.history.ron", include_str!("data/small-v1.history.ron")),
+        ("v2.history.ron", include_str!("data/small.history.ron")),
+    ] {
+        std::fs::write(root.join(name), text).unwrap();
+    }
+    let (v1, _) = Project::open(root.join("v1.history.ron")).unwrap();
+    let (v2, _) = Project::open(root.join("v2.history.ron")).unwrap();
+    assert_eq!(v1.history().cursor(), 1);
+    assert_eq!(v1.document(), v2.document());
+}

@@ -132,6 +132,22 @@ impl Resolved {
         )?)
     }
 
+    /// True when a binding made for `self` is valid for `other` on the same input: the same
+    /// layer, influence and area, and a tool with the same rest state
+    /// ([`Tool::same_rest_state`]); the tools' deformed states and the weights may differ.
+    fn same_rest(&self, other: &Resolved) -> bool {
+        let same_area = match (&self.area, &other.area) {
+            (Some(a), Some(b)) => Arc::ptr_eq(a, b) || a == b,
+            (None, None) => true,
+            _ => false,
+        };
+        same_area
+            && self.layer.name == other.layer.name
+            && self.layer.enabled == other.layer.enabled
+            && self.layer.influence == other.layer.influence
+            && self.layer.tool.same_rest_state(&other.layer.tool)
+    }
+
     /// The welded vertices whose input positions the layer's mask, bind and deformation
     /// read; `None` for every vertex.
     fn domain(&self) -> Option<&[u32]> {
@@ -306,7 +322,12 @@ impl Dirty {
     /// pass, for two stages with the same active vertices: every vertex they touch is
     /// settled, so only the last rule's outcome remains.
     fn settle_same(&mut self, old: &Stage, new: &Stage) {
-        let (idx, a, b) = (old.indices(), &old.written, &new.written);
+        self.settle_written(old.indices(), &old.written, &new.written);
+    }
+
+    /// [`Dirty::settle_same`] on the active vertices `idx` of both stages and their old
+    /// (`a`) and new (`b`) outputs.
+    fn settle_written(&mut self, idx: &[u32], a: &[Vec3], b: &[Vec3]) {
         if idx.len() < PARALLEL_THRESHOLD || self.flag.len() <= idx[idx.len() - 1] as usize {
             for ((&v, &a), &b) in idx.iter().zip(a).zip(b) {
                 if same_bits(a, b) {
@@ -514,6 +535,8 @@ pub struct MeshEvaluator {
     dirty: Dirty,
     /// How many stages were refreshed (see [`refresh`]) since the evaluator was made.
     refreshed: usize,
+    /// How many layer bindings were made since the evaluator was made.
+    binds: usize,
 }
 
 impl MeshEvaluator {
@@ -537,7 +560,17 @@ impl MeshEvaluator {
             normals: Vec::new(),
             dirty: Dirty::default(),
             refreshed: 0,
+            binds: 0,
         }
+    }
+
+    /// How many layer bindings (mask and tool bind: for a sketch tool its region of
+    /// interest, skinning and Eq. 9 factorisation) were made since the evaluator was made.
+    /// A layer whose tool changed only in its deformed state (a sketch target, a lattice's
+    /// control points, an axis's deformed points), on an unchanged input, keeps its binding.
+    #[must_use]
+    pub fn binds(&self) -> usize {
+        self.binds
     }
 
     /// The mesh node's name.
@@ -842,6 +875,41 @@ impl MeshEvaluator {
                 self.stages.push(stage);
                 continue;
             }
+            // The next old stage, when only its tool's deformed state (or the weight)
+            // changed and its input is unchanged: keep its binding, deform again.
+            if matched.is_none()
+                && let Some(Some(o)) = old.get(next_old)
+                && o.resolved.same_rest(r)
+                && !self.dirty.intersects(o.resolved.domain())
+                && let Some(o) = old[next_old].take()
+            {
+                next_old += 1;
+                let Stage {
+                    binding,
+                    written: old_written,
+                    ..
+                } = o;
+                let Recorded {
+                    saved,
+                    written,
+                    splits,
+                } = binding.apply_recorded(&r.layer, &mut self.positions)?;
+                if splits.is_some() {
+                    return Ok(None);
+                }
+                self.dirty
+                    .settle_written(&binding.mask.indices, &old_written, &written);
+                evaluated += 1;
+                self.stages.push(Stage {
+                    index: li,
+                    resolved: r.clone(),
+                    binding,
+                    saved,
+                    written,
+                });
+                continue;
+            }
+            self.binds += 1;
             let binding = r.bind(
                 &self.positions,
                 rest.topology(),

@@ -592,3 +592,128 @@ fn a_rebound_layer_with_the_same_bind_is_refreshed_exactly() {
         }
     }
 }
+
+/// A tool whose deformed state changes (a sketch bend's target, a curve's deformed control
+/// points, a lattice's control points) on an unchanged input keeps its binding — for the
+/// sketch tool its region of interest, skinning and Eq. 9 factorisation — and the result is
+/// still bit-identical to a fresh evaluation; a change of its rest state binds again.
+#[test]
+fn a_changed_deformed_state_keeps_the_binding() {
+    use ductile_core::curve::{CurveBasis, CurveTool};
+    use ductile_core::lattice::{ControlEdit, LatticeBasis, LatticeFrame, LatticeTool};
+    use ductile_core::sketch::partition::Partition;
+    use ductile_core::sketch::tool::{Curve, SketchMode, SketchTool};
+
+    let rest = rest();
+    let roi: Vec<u32> = (0..ROWS * COLUMNS)
+        .filter(|&i| (4..12).contains(&(i / COLUMNS)))
+        .map(|i| i as u32)
+        .collect();
+    let up = |x: f32| {
+        vec![
+            Vec3::new(0.0, 0.8, 0.0),
+            Vec3::new(x, 1.6, 0.0),
+            Vec3::new(x, 2.4, 0.0),
+        ]
+    };
+    let sketch = |x: f32| {
+        Tool::Sketch(Box::new(SketchTool {
+            partition: Some(Partition {
+                roi: roi.clone(),
+                rigid: Vec::new(),
+            }),
+            reference: Curve::Points(up(0.0)),
+            normal: Some(Vec3::Z),
+            mode: SketchMode::Bend {
+                target: Curve::Points(up(x)),
+                turning: None,
+            },
+            scale: None,
+            smooth: true,
+            refine: None,
+        }))
+    };
+    let curve = |y: f32| {
+        Tool::Curve(CurveTool {
+            basis: CurveBasis::BSpline { degree: 2 },
+            rest: vec![
+                Vec3::new(-1.0, 0.0, 0.0),
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(1.0, 0.0, 0.0),
+            ],
+            deformed: vec![
+                Vec3::new(-1.0, 0.0, 0.0),
+                Vec3::new(0.0, y, 0.0),
+                Vec3::new(1.0, 0.0, 0.0),
+            ],
+        })
+    };
+    let lattice = |dz: f32| {
+        Tool::Lattice(LatticeTool {
+            frame: LatticeFrame {
+                origin: Vec3::new(-1.2, 2.0, -1.2),
+                s: Vec3::new(2.4, 0.0, 0.0),
+                t: Vec3::new(0.0, 1.2, 0.0),
+                u: Vec3::new(0.0, 0.0, 2.4),
+            },
+            counts: (2, 2, 2),
+            basis: LatticeBasis::Bernstein,
+            points: vec![ControlEdit {
+                at: (1, 1, 1),
+                offset: Vec3::new(0.0, 0.0, dz),
+                weight: 1.0,
+            }],
+            falloff: 0.0,
+        })
+    };
+    let mut doc = scene();
+    doc.mesh_mut("m").unwrap().stack = vec![
+        LayerSpec::new("bend"),
+        LayerSpec::new("crv"),
+        LayerSpec::new("lat"),
+    ];
+    for (name, tool) in [
+        ("bend", sketch(0.3)),
+        ("crv", curve(0.2)),
+        ("lat", lattice(0.1)),
+    ] {
+        doc.nodes.push(node(name, Some("m"), NodeKind::Tool(tool)));
+    }
+    let mut ev = MeshEvaluator::new("m", rest.clone());
+    let u = ev.update(&doc).unwrap();
+    check_against_fresh(&ev, &Ok(u), &doc, &rest);
+    let binds = ev.binds();
+    assert_eq!(binds, 3);
+    for (k, x) in [0.5_f32, -0.4, 0.1].into_iter().enumerate() {
+        doc.node_mut("bend").unwrap().kind = NodeKind::Tool(sketch(x));
+        if k == 1 {
+            doc.node_mut("lat").unwrap().kind = NodeKind::Tool(lattice(x));
+        }
+        let u = ev.update(&doc).unwrap();
+        check_against_fresh(&ev, &Ok(u), &doc, &rest);
+        // The sketch layer kept its binding; the layers above read moved vertices, so they
+        // bind again.
+        assert_eq!(u.first_layer, 0);
+        assert_eq!(ev.binds(), binds + 2 * (k + 1), "frame {k}");
+    }
+    // Only the top layer changes: only it is bound again (a lattice's bind is its prepared
+    // control grid, made from the tool alone, so it is always made anew).
+    let before = ev.binds();
+    doc.node_mut("lat").unwrap().kind = NodeKind::Tool(lattice(0.35));
+    let u = ev.update(&doc).unwrap();
+    check_against_fresh(&ev, &Ok(u), &doc, &rest);
+    assert_eq!((u.layers_evaluated, ev.binds()), (1, before + 1));
+    // The curve keeps its binding; the lattice above reads moved vertices.
+    doc.node_mut("crv").unwrap().kind = NodeKind::Tool(curve(-0.3));
+    let u = ev.update(&doc).unwrap();
+    check_against_fresh(&ev, &Ok(u), &doc, &rest);
+    assert_eq!(ev.binds(), before + 2);
+    // A new reference curve is a new rest state: bound again.
+    let before = ev.binds();
+    if let NodeKind::Tool(Tool::Sketch(t)) = &mut doc.node_mut("bend").unwrap().kind {
+        t.reference = Curve::Points(up(0.05));
+    }
+    let u = ev.update(&doc).unwrap();
+    check_against_fresh(&ev, &Ok(u), &doc, &rest);
+    assert!(ev.binds() >= before + 1);
+}
