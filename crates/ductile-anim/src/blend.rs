@@ -13,6 +13,7 @@
 use ductile_core::axial::AxisPoint;
 use glam::{Quat, Vec3};
 
+use crate::channel::same_direction;
 use crate::skeleton::{
     PlaneFrame, SpaceFrame, plane_coords, plane_points, space_coords, space_len, space_points,
 };
@@ -136,7 +137,9 @@ pub fn encode(values: &[&Value], base: usize) -> Option<Encoded> {
             let mut curves: Vec<&[Vec3]> = Vec::with_capacity(values.len());
             for v in values {
                 match v {
-                    Value::PlaneCurve { points, normal: n } if n == normal => curves.push(points),
+                    Value::PlaneCurve { points, normal: n } if same_direction(*n, *normal) => {
+                        curves.push(points);
+                    }
                     _ => return None,
                 }
             }

@@ -95,7 +95,7 @@ impl Slot<'_> {
             (Slot::Polyline(x), Value::Polyline(v)) => x.clone_from(v),
             (Slot::Axis(x), Value::Axis(v)) => x.clone_from(v),
             (Slot::PlaneCurve(x, n), Value::PlaneCurve { points, normal }) => {
-                if *normal != n {
+                if !same_direction(*normal, n) {
                     return Err(AnimError::OtherPlane {
                         path: path.to_owned(),
                         normal: n,
@@ -107,6 +107,16 @@ impl Slot<'_> {
             (slot, _) => return Err(wrong(slot.kind())),
         }
         Ok(())
+    }
+}
+
+/// True when `a` and `b` point the same way (within 1e-6 of the cosine): plane normals
+/// written by hand need not be unit vectors to the last bit.
+#[must_use]
+pub fn same_direction(a: Vec3, b: Vec3) -> bool {
+    match (a.try_normalize(), b.try_normalize()) {
+        (Some(a), Some(b)) => a.dot(b) >= 1.0 - 1e-6,
+        _ => false,
     }
 }
 

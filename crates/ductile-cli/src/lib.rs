@@ -22,7 +22,8 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Evaluate every mesh's deformation stack and export the result as glTF.
+    /// Evaluate every mesh's deformation stack (at a frame of the animation) and export the
+    /// result as glTF.
     Apply(commands::apply::Args),
     /// Validate a scene file and print every problem found.
     Check(commands::check::Args),
@@ -35,6 +36,15 @@ pub enum Command {
     Replay(commands::replay::Args),
     /// List the steps of a history file (index, time, label).
     History(commands::history::Args),
+    /// Bake the scene's animation into glTF morph targets with a weights animation (or one
+    /// file per frame).
+    ExportAnim(commands::export_anim::Args),
+    /// Export the rest meshes with one morph target per variant.
+    ExportMorphs(commands::export_morphs::Args),
+    /// Blend variants (two with t, N with weights, or seeded random) and export the meshes.
+    Blend(commands::blend::Args),
+    /// List the scene's variants, one name per line.
+    Variants(commands::variants::Args),
 }
 
 /// Parses `args` (the first item is the program name) and runs the command, writing its
@@ -53,6 +63,10 @@ where
         Command::Bench(a) => commands::bench::run(&a, out),
         Command::Replay(a) => commands::replay::run(&a, out),
         Command::History(a) => commands::history::run(&a, out),
+        Command::ExportAnim(a) => commands::export_anim::run(&a, out),
+        Command::ExportMorphs(a) => commands::export_morphs::run(&a, out),
+        Command::Blend(a) => commands::blend::run(&a, out),
+        Command::Variants(a) => commands::variants::run(&a, out),
     }
 }
 

@@ -172,6 +172,27 @@ pub enum IoError {
         /// The problem.
         source: SceneError,
     },
+    /// A mesh cannot be evaluated at a time of the animation.
+    #[error("{}: mesh '{mesh}' at {time} s: {source}", path.display())]
+    MeshAtTime {
+        /// The scene file.
+        path: PathBuf,
+        /// The mesh node.
+        mesh: String,
+        /// The time (seconds).
+        time: f32,
+        /// The problem.
+        source: SceneError,
+    },
+    /// An animation or variants cannot be baked or exported as asked (a range outside the
+    /// timeline, too many morph targets, a refining layer, no variants, ...).
+    #[error("{}: {problem}", path.display())]
+    Bake {
+        /// The scene file.
+        path: PathBuf,
+        /// What is wrong.
+        problem: String,
+    },
     /// A mesh cannot be exported (non-finite positions, too large, ...).
     #[error("{}: cannot export mesh '{mesh}': {problem}", path.display())]
     Export {

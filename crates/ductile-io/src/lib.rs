@@ -4,7 +4,10 @@
 //!   with a migration step for old versions;
 //! * [`mesh`]: mesh import from glTF (`.glb`, `.gltf`) and OBJ, with an optional `#name`
 //!   selection of one part ([`load_mesh`], [`MeshRef`]);
-//! * [`export`]: glTF 2.0 export ([`export_gltf`]);
+//! * [`export`]: glTF 2.0 export ([`export_gltf`], with morph targets and weight
+//!   animations [`export_gltf_with`]);
+//! * [`bake`]: an animation baked as morph targets or one file per frame, variants as
+//!   morph targets;
 //! * [`history_file`]: versioned RON edit histories with an inline or hashed base scene
 //!   ([`read_history`], [`save_history`]);
 //! * [`project`]: Studio projects, a scene file with its history beside it ([`Project`]:
@@ -16,6 +19,7 @@
 //! Every error is an [`IoError`] naming the file (and the scene node). Every file is written
 //! atomically ([`write_atomic`]): a failed write never leaves a half-written file.
 
+pub mod bake;
 pub mod embedded;
 pub mod error;
 pub mod export;
@@ -28,7 +32,10 @@ use std::io::Write as _;
 use std::path::Path;
 
 pub use error::{IoError, Result, report};
-pub use export::{ExportMesh, export_gltf};
+pub use export::{
+    ExportMesh, MorphTarget, Morphs, Sampling, WeightsAnimation, WeightsTrack, export_gltf,
+    export_gltf_with,
+};
 pub use history_file::{
     Base, LoadedHistory, SaveBase, document_hash, is_history_file, is_history_text, read_history,
     save_history,

@@ -1,5 +1,5 @@
-//! `ductile apply SCENE [-o OUT]`: evaluate every mesh's stack and export glTF. `SCENE` may
-//! also be a history file.
+//! `ductile apply SCENE [-o OUT] [--frame N [--fps F]]`: evaluate every mesh's stack (at a
+//! frame of the animation) and export glTF. `SCENE` may also be a history file.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -16,6 +16,12 @@ pub struct Args {
     /// Output file, `.glb` or `.gltf` (default: `<scene stem>.glb` in the current directory).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
+    /// Evaluate the animation at frame N (may be fractional; must lie in the timeline).
+    #[arg(long, value_name = "N")]
+    pub frame: Option<f32>,
+    /// Frames per second for `--frame` (default: the scene's).
+    #[arg(long, value_name = "F", requires = "frame")]
+    pub fps: Option<f32>,
 }
 
 /// The default output path: the scene's file stem with `.glb`, in the current directory.
@@ -29,7 +35,14 @@ pub fn default_output(scene: &Path) -> PathBuf {
 
 /// Runs the command.
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<u8> {
-    let scene = super::load_input(&args.scene)?;
+    let mut scene = super::load_input(&args.scene)?;
+    if let Some(frame) = args.frame {
+        let time = super::frame_time(&scene, frame, args.fps)?;
+        scene.document = scene.document.at(time).with_context(|| {
+            format!("{}: cannot evaluate at frame {frame}", args.scene.display())
+        })?;
+        writeln!(out, "frame {frame} ({time} s)")?;
+    }
     let output = args
         .output
         .clone()

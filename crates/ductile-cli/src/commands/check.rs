@@ -11,9 +11,15 @@ pub struct Args {
 }
 
 /// Runs the command: prints every problem, one per line, and returns 1 if there is any;
-/// prints `ok` and returns 0 otherwise.
+/// prints `ok` and returns 0 otherwise. Warnings (animation tracks that step where their keys
+/// cannot be interpolated) are printed first and do not fail the check.
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<u8> {
     let problems = ductile_io::check_scene(&args.file);
+    if let Ok(doc) = ductile_io::read_scene(&args.file) {
+        for w in doc.warnings() {
+            writeln!(out, "warning: {}: {w}", args.file.display())?;
+        }
+    }
     if problems.is_empty() {
         writeln!(out, "ok")?;
         return Ok(0);

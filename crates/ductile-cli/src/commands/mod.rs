@@ -2,10 +2,14 @@
 
 pub mod apply;
 pub mod bench;
+pub mod blend;
 pub mod check;
+pub mod export_anim;
+pub mod export_morphs;
 pub mod history;
 pub mod info;
 pub mod replay;
+pub mod variants;
 
 use std::path::Path;
 
@@ -37,6 +41,22 @@ pub fn load_input(path: &Path) -> anyhow::Result<LoadedScene> {
             .with_context(|| format!("cannot load history {}", path.display()));
     }
     ductile_io::load_scene(path).with_context(|| format!("cannot load scene {}", path.display()))
+}
+
+/// The time in seconds of frame `frame` at `fps` frames per second (default: the scene's),
+/// checked against the scene's timeline.
+pub fn frame_time(scene: &LoadedScene, frame: f32, fps: Option<f32>) -> anyhow::Result<f32> {
+    let anim = &scene.document.animation;
+    let fps = fps.unwrap_or(anim.fps);
+    if !(fps.is_finite() && fps > 0.0) {
+        anyhow::bail!("--fps {fps} must be a number > 0");
+    }
+    let time = frame / fps;
+    // The timeline's frames are at the scene's rate: compare times.
+    let in_scene_frames = time * anim.fps;
+    anim.check_frame(in_scene_frames)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", scene.path.display()))?;
+    Ok(time)
 }
 
 /// Milliseconds of a duration, for reports.
