@@ -6,7 +6,9 @@
 //!    ([`PURE_FORBIDDEN`]).
 //! 3. Only [`ENGINE_CRATES`] depend on bevy / bevy_egui / egui.
 //! 4. `ductile-history` (when present) depends only on core, scene and [`HISTORY_ALLOWED`].
-//! 5. The sources of `ductile-core` and `ductile-scene` do no file I/O (`std::fs`, `File::`).
+//! 5. `ductile-anim` depends only on [`ANIM_ALLOWED`].
+//! 6. The sources of `ductile-core`, `ductile-anim`, `ductile-scene` and `ductile-bevy` do no
+//!    file I/O (`std::fs`, `File::`).
 
 #![allow(clippy::unwrap_used)] // Tests may unwrap (house rules).
 
@@ -26,7 +28,12 @@ const CORE_ALLOWED: &[&str] = &[
     "petgraph",
     "wide",
 ];
-/// Dependencies the pure crates (core, scene) must never have.
+/// Normal dependencies `ductile-anim` may have: core, math, serialisation, errors, and a
+/// portable seeded generator for random variants.
+const ANIM_ALLOWED: &[&str] = &["ductile-core", "glam", "serde", "thiserror", "chacha20"];
+/// The pure crates: no engine, UI or file-format dependency.
+const PURE_CRATES: &[&str] = &["ductile-core", "ductile-anim", "ductile-scene"];
+/// Dependencies the pure crates must never have.
 const PURE_FORBIDDEN: &[&str] = &["bevy", "egui", "bevy_egui", "gltf", "ron"];
 /// Engine and UI crates.
 const ENGINE_DEPS: &[&str] = &["bevy", "bevy_egui", "egui", "egui-file-dialog"];
@@ -35,6 +42,7 @@ const ENGINE_CRATES: &[&str] = &["ductile-bevy", "ductile-studio"];
 /// What `ductile-history` may depend on besides core and scene: small pure crates.
 const HISTORY_ALLOWED: &[&str] = &[
     "ductile-core",
+    "ductile-anim",
     "ductile-scene",
     "serde",
     "thiserror",
@@ -96,7 +104,16 @@ fn violations(manifests: &[Manifest]) -> Vec<String> {
                 }
             }
         }
-        if m.name == "ductile-core" || m.name == "ductile-scene" {
+        if m.name == "ductile-anim" {
+            for d in &m.deps {
+                if !ANIM_ALLOWED.contains(&d.as_str()) {
+                    out.push(format!(
+                        "ductile-anim depends on '{d}' (allowed: {ANIM_ALLOWED:?})"
+                    ));
+                }
+            }
+        }
+        if PURE_CRATES.contains(&m.name.as_str()) {
             for d in PURE_FORBIDDEN.iter().filter(|d| has(d)) {
                 out.push(format!("{} depends on '{d}'", m.name));
             }
@@ -172,6 +189,7 @@ fn crate_dependencies_follow_the_architecture() {
 fn pure_crates_do_no_file_io() {
     let root = common::root();
     let mut uses = file_io_uses(&root.join("crates/ductile-core/src"));
+    uses.extend(file_io_uses(&root.join("crates/ductile-anim/src")));
     uses.extend(file_io_uses(&root.join("crates/ductile-scene/src")));
     uses.extend(file_io_uses(&root.join("crates/ductile-bevy/src")));
     assert!(
@@ -236,6 +254,18 @@ fn history_dependencies_are_limited() {
     assert!(violations(&[ok]).is_empty());
     let v = violations(&[manifest("ductile-history", "ductile-io = { path = \"x\" }")]);
     assert_eq!(v.len(), 1, "{v:?}");
+}
+
+#[test]
+fn anim_dependencies_are_limited() {
+    let ok = manifest(
+        "ductile-anim",
+        "ductile-core = { path = \"x\" }\nchacha20 = \"0.10\"",
+    );
+    assert!(violations(&[ok]).is_empty());
+    // Outside the allow-list and a file-format crate in a pure crate.
+    let v = violations(&[manifest("ductile-anim", "ron = \"0.12\"")]);
+    assert_eq!(v.len(), 2, "{v:?}");
 }
 
 #[test]
