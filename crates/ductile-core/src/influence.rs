@@ -57,6 +57,43 @@ impl Shape {
         }
     }
 
+    /// The local axis-aligned box holding every point of normalised distance ≤ 1:
+    /// `(min, max)`.
+    #[must_use]
+    pub fn local_bounds(&self) -> (Vec3, Vec3) {
+        let half = match *self {
+            Shape::Sphere { radius } => Vec3::splat(radius),
+            Shape::Box { half_extents } => half_extents,
+            Shape::Capsule {
+                radius,
+                half_height,
+            } => Vec3::new(radius, half_height + radius, radius),
+        };
+        (-half, half)
+    }
+
+    /// The axis-aligned box, in the space `placement` maps into, that holds every point of the
+    /// shape (normalised distance ≤ 1), padded by `1e-4` of its size (and `1e-6`) so that
+    /// rounding never leaves a point of the shape outside it.
+    #[must_use]
+    pub fn bounds_in(&self, placement: &Affine3A) -> (Vec3, Vec3) {
+        let (lo, hi) = self.local_bounds();
+        let mut min = Vec3::splat(f32::INFINITY);
+        let mut max = Vec3::splat(f32::NEG_INFINITY);
+        for k in 0..8 {
+            let corner = Vec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            );
+            let p = placement.transform_point3(corner);
+            min = min.min(p);
+            max = max.max(p);
+        }
+        let pad = (max - min) * 1e-4 + Vec3::splat(1e-6);
+        (min - pad, max + pad)
+    }
+
     /// Checks the shape's sizes (finite and positive). `what` names the volume in errors.
     pub fn validate(&self, what: &str) -> Result<()> {
         let positive = |name: &str, v: f32| -> Result<()> {
@@ -306,6 +343,42 @@ impl Influence {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bounds_hold_every_point_of_a_placed_shape() {
+        let placement = Affine3A::from_scale_rotation_translation(
+            Vec3::new(1.5, 0.4, 2.0),
+            glam::Quat::from_euler(glam::EulerRot::XYZ, 0.3, -1.1, 2.0),
+            Vec3::new(-3.0, 0.5, 7.0),
+        );
+        let shapes = [
+            Shape::Sphere { radius: 0.7 },
+            Shape::Box {
+                half_extents: Vec3::new(0.2, 1.0, 0.5),
+            },
+            Shape::Capsule {
+                radius: 0.3,
+                half_height: 0.8,
+            },
+        ];
+        for shape in shapes {
+            let (lo, hi) = shape.bounds_in(&placement);
+            let volume = Volume::new(shape, placement, "v").unwrap();
+            let (a, b) = shape.local_bounds();
+            // A grid over the local bounds: every point of the shape lies in the box.
+            for i in 0..=20 {
+                for j in 0..=20 {
+                    for k in 0..=20 {
+                        let f = Vec3::new(i as f32, j as f32, k as f32) / 20.0;
+                        let p = placement.transform_point3(a + (b - a) * f);
+                        if volume.normalized_distance(p) <= 1.0 {
+                            assert!(p.cmpge(lo).all() && p.cmple(hi).all(), "{shape:?} {p}");
+                        }
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn falloff_shapes() {

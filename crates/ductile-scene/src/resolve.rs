@@ -193,18 +193,22 @@ pub fn resolve_area(area: &Area, rest: &RestMesh, what: &str) -> Result<Vec<u32>
             v
         }
         Area::Region(shapes) => {
+            // Each shape with its mesh-space bounding box: most vertices are outside every
+            // box, and the box test is much cheaper than the shape's.
             let mut vols = Vec::with_capacity(shapes.len());
             for (k, s) in shapes.iter().enumerate() {
-                vols.push(Volume::new(
-                    s.shape,
-                    s.transform.affine(),
-                    &format!("{what}: shape {k}"),
-                )?);
+                let placement = s.transform.affine();
+                let volume = Volume::new(s.shape, placement, &format!("{what}: shape {k}"))?;
+                vols.push((s.shape.bounds_in(&placement), volume));
             }
             rest.welded_positions()
                 .iter()
                 .enumerate()
-                .filter(|(_, p)| vols.iter().any(|v| v.normalized_distance(**p) <= 1.0))
+                .filter(|(_, p)| {
+                    vols.iter().any(|((lo, hi), v)| {
+                        p.cmpge(*lo).all() && p.cmple(*hi).all() && v.normalized_distance(**p) <= 1.0
+                    })
+                })
                 .map(|(i, _)| i as u32)
                 .collect()
         }

@@ -148,25 +148,45 @@ impl Document {
     /// macro values, tools). Errors name a node that does not exist or is of another kind.
     pub fn with_states(&self, states: &BTreeMap<String, NodeState>) -> Result<Document> {
         let mut doc = self.clone();
+        doc.set_states(states)?;
+        Ok(doc)
+    }
+
+    /// Writes `states` into their nodes in place (what [`Document::with_states`] does
+    /// without copying the document: an A/B slider writes each blend into one working
+    /// copy). Checks every state first: on error the document is unchanged.
+    pub fn set_states(&mut self, states: &BTreeMap<String, NodeState>) -> Result<()> {
+        let mut at = Vec::with_capacity(states.len());
         for (name, s) in states {
-            let node = doc.node_mut(name)?;
+            let i = self.index_of(name).ok_or_else(|| SceneError::NoSuchNode {
+                name: name.clone(),
+            })?;
+            let fits = matches!(
+                (&self.nodes[i].kind, &s.state),
+                (NodeKind::Macro(_), State::Macro(_)) | (NodeKind::Tool(_), State::Tool(_))
+            );
+            if !fits {
+                return Err(SceneError::WrongKind {
+                    node: name.clone(),
+                    found: self.nodes[i].kind.name(),
+                    expected: match s.state {
+                        State::Macro(_) => "macro tool",
+                        State::Tool(_) => "tool",
+                    },
+                });
+            }
+            at.push(i);
+        }
+        for (i, s) in at.into_iter().zip(states.values()) {
+            let node = &mut self.nodes[i];
             node.transform = s.transform;
             match (&mut node.kind, &s.state) {
                 (NodeKind::Macro(m), State::Macro(v)) => m.value = *v,
                 (NodeKind::Tool(t), State::Tool(v)) => t.clone_from(v),
-                (kind, state) => {
-                    return Err(SceneError::WrongKind {
-                        node: name.clone(),
-                        found: kind.name(),
-                        expected: match state {
-                            State::Macro(_) => "macro tool",
-                            State::Tool(_) => "tool",
-                        },
-                    });
-                }
+                _ => {}
             }
         }
-        Ok(doc)
+        Ok(())
     }
 
     /// The blend `Σ wᵢ Vᵢ` of the named variants (`(name, weight)` pairs; the weights must
