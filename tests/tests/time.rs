@@ -96,7 +96,11 @@ fn the_bent_arm_mesh_keeps_its_length_at_the_middle_frame() {
                 .collect()
         })
         .collect();
-    assert!(slices.iter().all(|s| s.len() >= 8), "{:?}", slices.iter().map(Vec::len).collect::<Vec<_>>());
+    assert!(
+        slices.iter().all(|s| s.len() >= 8),
+        "{:?}",
+        slices.iter().map(Vec::len).collect::<Vec<_>>()
+    );
     let centroids = |positions: &dyn Fn(usize) -> Vec3| -> Vec<Vec3> {
         slices
             .iter()
@@ -109,7 +113,11 @@ fn the_bent_arm_mesh_keeps_its_length_at_the_middle_frame() {
     };
     let rest_len = length(&centroids(&|w| rest[w]));
     let mid_time = 12.0 / doc.animation.fps;
-    let skeleton = doc.at(mid_time).unwrap().evaluate("body", &body.rest).unwrap();
+    let skeleton = doc
+        .at(mid_time)
+        .unwrap()
+        .evaluate("body", &body.rest)
+        .unwrap();
     let at_key = |t: f32| {
         length(&welded(
             &doc.at(t).unwrap().evaluate("body", &body.rest).unwrap(),
@@ -118,7 +126,10 @@ fn the_bent_arm_mesh_keeps_its_length_at_the_middle_frame() {
     let (k0, k1) = (at_key(0.0), at_key(1.0));
     let mean = 0.5 * (k0 + k1);
     let mid = length(&welded(&skeleton));
-    assert!((mid / mean - 1.0).abs() < 0.01, "skeleton-style: {mid} vs keys {k0}, {k1}");
+    assert!(
+        (mid / mean - 1.0).abs() < 0.01,
+        "skeleton-style: {mid} vs keys {k0}, {k1}"
+    );
     // The same frame with the target lerped point by point.
     let lerped: Vec<Vec3> = reference
         .iter()
@@ -143,7 +154,10 @@ fn the_bent_arm_mesh_keeps_its_length_at_the_middle_frame() {
     let lerp_mesh = linear.evaluate("body", &body.rest).unwrap();
     let shortened = 1.0 - length(&welded(&lerp_mesh)) / k0.min(k1);
     assert!(shortened > 0.05, "lerped target: shortened by {shortened}");
-    assert!((k0 / rest_len - 1.0).abs() < 1e-5, "frame 0 is the rest pose");
+    assert!(
+        (k0 / rest_len - 1.0).abs() < 1e-5,
+        "frame 0 is the rest pose"
+    );
 }
 
 #[test]
@@ -195,7 +209,10 @@ fn variants_blend_to_themselves_at_0_and_1_bit_for_bit() {
     let sources = ["suspect-a", "suspect-b", "suspect-c", "suspect-d"];
     let r1 = doc.random_variant(&sources, &opts(7)).unwrap();
     assert_eq!(r1, doc.random_variant(&sources, &opts(7)).unwrap());
-    assert_ne!(r1.states, doc.random_variant(&sources, &opts(8)).unwrap().states);
+    assert_ne!(
+        r1.states,
+        doc.random_variant(&sources, &opts(8)).unwrap().states
+    );
 }
 
 /// A history with keys, interpolation changes, a saved, a random and an applied variant,
@@ -205,11 +222,7 @@ fn variants_blend_to_themselves_at_0_and_1_bit_for_bit() {
 fn a_history_of_time_edits_replays_bit_for_bit() {
     let dir = tempfile::tempdir().unwrap();
     let scene_path = dir.path().join("v.ron");
-    std::fs::copy(
-        root().join("scenes/identikit-variants.ron"),
-        &scene_path,
-    )
-    .unwrap();
+    std::fs::copy(root().join("scenes/identikit-variants.ron"), &scene_path).unwrap();
     // The scene's mesh source is relative to scenes/: point it at the asset.
     let text = std::fs::read_to_string(&scene_path).unwrap().replace(
         "../assets/meshes/lee-perry-smith-head.glb",
@@ -242,19 +255,29 @@ fn a_history_of_time_edits_replays_bit_for_bit() {
         Key::new(0.5, Value::Scalar(0.9)),
     );
     push(&mut p, op);
-    let op = Operation::set_interpolation(p.document(), "nose-length", "value", 0.0, Interpolation::Linear)
-        .unwrap();
+    let op = Operation::set_interpolation(
+        p.document(),
+        "nose-length",
+        "value",
+        0.0,
+        Interpolation::Linear,
+    )
+    .unwrap();
     push(&mut p, op);
     let random = p
         .document()
-        .random_variant(&["suspect-b", "suspect-c"], &RandomOptions {
-            seed: 11,
-            ..RandomOptions::default()
-        })
+        .random_variant(
+            &["suspect-b", "suspect-c"],
+            &RandomOptions {
+                seed: 11,
+                ..RandomOptions::default()
+            },
+        )
         .unwrap();
     let op = Operation::put_variant(p.document(), "witness-1", Some(random));
     push(&mut p, op);
-    let op = Operation::set_macro_value_symmetric(p.document(), "left-ear-protrusion", 0.4).unwrap();
+    let op =
+        Operation::set_macro_value_symmetric(p.document(), "left-ear-protrusion", 0.4).unwrap();
     push(&mut p, op);
     let op = Operation::save_variant(p.document(), "suspect-e");
     push(&mut p, op);
@@ -300,7 +323,10 @@ fn export_anim_writes_targets_and_a_weights_animation() {
     let prim = mesh.primitives().next().unwrap();
     let targets = prim.morph_targets().count();
     assert!((2..=25).contains(&targets), "{targets}");
-    assert!(text.contains(&format!("mesh 'body': {targets} morph targets")), "{text}");
+    assert!(
+        text.contains(&format!("mesh 'body': {targets} morph targets")),
+        "{text}"
+    );
     assert_eq!(mesh.weights().unwrap().len(), targets);
     let names = mesh.extras().as_ref().unwrap().get();
     assert!(names.contains("targetNames"), "{names}");
@@ -313,7 +339,10 @@ fn export_anim_writes_targets_and_a_weights_animation() {
     let sampler = channel.sampler();
     assert_eq!(sampler.input().count(), 25);
     assert_eq!(sampler.output().count(), 25 * targets);
-    assert_eq!(sampler.interpolation(), gltf::animation::Interpolation::Linear);
+    assert_eq!(
+        sampler.interpolation(),
+        gltf::animation::Interpolation::Linear
+    );
     // One file per frame.
     let frames = dir.path().join("frames");
     let (r, text) = cli(&[
@@ -335,7 +364,12 @@ fn export_morphs_writes_one_named_target_per_variant() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("faces.glb");
     let scene = root().join("scenes/identikit-variants.ron");
-    let (r, text) = cli(&["export-morphs", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    let (r, text) = cli(&[
+        "export-morphs",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
     assert_eq!(r, Ok(0), "{text}");
     let doc = read_glb(&out);
     let mesh = doc.meshes().next().unwrap();
@@ -356,11 +390,51 @@ fn bad_time_input_gets_a_clear_error() {
     let out = dir.path().join("x.glb");
     let o = out.to_str().unwrap();
     let cases: [(&[&str], &str); 6] = [
-        (&["apply", a, "--frame", "49", "-o", o], "frame 49 is outside the timeline (frames 0 to 48)"),
-        (&["export-anim", a, "-o", o, "--from", "0", "--to", "60"], "frame 60 is outside the timeline"),
-        (&["export-anim", a, "-o", o, "--fps", "240", "--tolerance", "0"], "more than 256 morph targets"),
-        (&["blend", v, "--variants", "suspect-a,nobody", "--t", "0.5", "-o", o], "no variant named 'nobody'"),
-        (&["blend", v, "--weights", "suspect-a=0.5,suspect-b=0.6", "-o", o], "must sum to 1"),
+        (
+            &["apply", a, "--frame", "49", "-o", o],
+            "frame 49 is outside the timeline (frames 0 to 48)",
+        ),
+        (
+            &["export-anim", a, "-o", o, "--from", "0", "--to", "60"],
+            "frame 60 is outside the timeline",
+        ),
+        (
+            &[
+                "export-anim",
+                a,
+                "-o",
+                o,
+                "--fps",
+                "240",
+                "--tolerance",
+                "0",
+            ],
+            "more than 256 morph targets",
+        ),
+        (
+            &[
+                "blend",
+                v,
+                "--variants",
+                "suspect-a,nobody",
+                "--t",
+                "0.5",
+                "-o",
+                o,
+            ],
+            "no variant named 'nobody'",
+        ),
+        (
+            &[
+                "blend",
+                v,
+                "--weights",
+                "suspect-a=0.5,suspect-b=0.6",
+                "-o",
+                o,
+            ],
+            "must sum to 1",
+        ),
         (&["export-anim", v, "-o", o], "no animation"),
     ];
     for (args, expected) in cases {
@@ -376,6 +450,9 @@ fn variants_are_listed_one_per_line() {
     let v = root().join("scenes/identikit-variants.ron");
     let (r, text) = cli(&["variants", v.to_str().unwrap()]);
     assert_eq!(r, Ok(0));
-    let names: Vec<&str> = text.lines().map(|l| l.split('\t').next().unwrap()).collect();
+    let names: Vec<&str> = text
+        .lines()
+        .map(|l| l.split('\t').next().unwrap())
+        .collect();
     assert_eq!(names, ["suspect-a", "suspect-b", "suspect-c", "suspect-d"]);
 }

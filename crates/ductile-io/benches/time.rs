@@ -70,9 +70,7 @@ fn anim(c: &mut Criterion) {
     let options = BakeOptions::timeline(&head.document);
     c.bench_function("anim/identikit-30-keyed/export-48", |b| {
         b.iter(|| {
-            black_box(
-                export_animation(&head, &out, &options, &mut |_, _| {}).expect("export"),
-            )
+            black_box(export_animation(&head, &out, &options, &mut |_, _| {}).expect("export"))
         })
     });
     c.bench_function("anim/identikit-30-keyed/sample-48", |b| {
@@ -82,7 +80,9 @@ fn anim(c: &mut Criterion) {
             let mut ev = MeshEvaluator::new("head", rest.clone());
             let mut posed = doc.clone();
             for f in 0..=48 {
-                posed.pose_at(doc, f as f32 / doc.animation.fps).expect("pose");
+                posed
+                    .pose_at(doc, f as f32 / doc.animation.fps)
+                    .expect("pose");
                 ev.update(&posed).expect("update");
             }
             black_box(ev.deformed().map(|d| d.positions.len()))

@@ -206,7 +206,9 @@ pub fn resolve_area(area: &Area, rest: &RestMesh, what: &str) -> Result<Vec<u32>
                 .enumerate()
                 .filter(|(_, p)| {
                     vols.iter().any(|((lo, hi), v)| {
-                        p.cmpge(*lo).all() && p.cmple(*hi).all() && v.normalized_distance(**p) <= 1.0
+                        p.cmpge(*lo).all()
+                            && p.cmple(*hi).all()
+                            && v.normalized_distance(**p) <= 1.0
                     })
                 })
                 .map(|(i, _)| i as u32)

@@ -158,9 +158,9 @@ impl Document {
     pub fn set_states(&mut self, states: &BTreeMap<String, NodeState>) -> Result<()> {
         let mut at = Vec::with_capacity(states.len());
         for (name, s) in states {
-            let i = self.index_of(name).ok_or_else(|| SceneError::NoSuchNode {
-                name: name.clone(),
-            })?;
+            let i = self
+                .index_of(name)
+                .ok_or_else(|| SceneError::NoSuchNode { name: name.clone() })?;
             let fits = matches!(
                 (&self.nodes[i].kind, &s.state),
                 (NodeKind::Macro(_), State::Macro(_)) | (NodeKind::Tool(_), State::Tool(_))
