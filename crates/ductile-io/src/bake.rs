@@ -216,7 +216,7 @@ pub fn bake_animation(
                     path: path.clone(),
                     mesh: m.name.clone(),
                     time: s.time,
-                    source,
+                    source: Box::new(source),
                 })?;
             let Some(d) = evaluators[i].deformed() else {
                 continue;
@@ -341,7 +341,7 @@ pub fn export_frames(
                 path: scene.path.clone(),
                 mesh: m.name.clone(),
                 time: s.time,
-                source,
+                source: Box::new(source),
             })?;
         }
         let meshes: Vec<ExportMesh<'_>> = evaluators

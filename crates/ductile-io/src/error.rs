@@ -182,7 +182,7 @@ pub enum IoError {
         /// The time (seconds).
         time: f32,
         /// The problem.
-        source: SceneError,
+        source: Box<SceneError>,
     },
     /// An animation or variants cannot be baked or exported as asked (a range outside the
     /// timeline, too many morph targets, a refining layer, no variants, ...).
