@@ -456,3 +456,44 @@ fn variants_are_listed_one_per_line() {
         .collect();
     assert_eq!(names, ["suspect-a", "suspect-b", "suspect-c", "suspect-d"]);
 }
+
+/// Keys whose values cannot be interpolated (a spline control with another number of values)
+/// make the track step, and `ductile check` says so without failing.
+#[test]
+fn check_warns_where_a_track_steps() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = load_scene(root().join("scenes/animation-demo.ron"))
+        .unwrap()
+        .document;
+    if let Some(NodeKind::Tool(ductile_core::tool::Tool::Sketch(t))) = doc
+        .nodes
+        .iter_mut()
+        .find(|n| n.name == "bend-arm")
+        .map(|n| &mut n.kind)
+        && let ductile_core::sketch::tool::SketchMode::Bend { turning, .. } = &mut t.mode
+    {
+        *turning = Some(ductile_core::sketch::tool::SplineControl::identity(4, 3));
+    }
+    let track = doc.animation.tracks.get_mut("bend-arm").unwrap();
+    track.insert(
+        "mode.turning.values".to_owned(),
+        vec![
+            Key::new(0.0, Value::Values(vec![0.0, 0.3, 0.7, 1.0])),
+            Key::new(1.0, Value::Values(vec![0.0, 0.5, 1.0])),
+        ],
+    );
+    // Mesh sources are relative to the scene file: write it where the original is read from.
+    let path = dir.path().join("steps.ron");
+    let text = ductile_io::scene::scene_to_string(&doc).unwrap().replace(
+        "../assets/meshes/",
+        &format!("{}/", root().join("assets/meshes").display()),
+    );
+    std::fs::write(&path, text).unwrap();
+    let (r, out) = cli(&["check", path.to_str().unwrap()]);
+    assert_eq!(r, Ok(0), "{out}");
+    assert!(
+        out.contains("'bend-arm' / 'mode.turning.values': keys 0 (at 0 s, a list of spline values of 4) and 1 (at 1 s, a list of spline values of 3) cannot be interpolated; the track steps there"),
+        "{out}"
+    );
+    assert!(out.ends_with("ok\n"), "{out}");
+}
