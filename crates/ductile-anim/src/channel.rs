@@ -344,6 +344,10 @@ fn shape(w: &mut Walker<'_>, s: &mut Shape) {
             w.scalar("radius", radius);
             w.scalar("half_height", half_height);
         }
+        Shape::Tube { points, radii } => {
+            w.slot("points", Slot::Polyline(points));
+            w.slot("radii", Slot::Values(radii));
+        }
     }
 }
 
@@ -426,7 +430,7 @@ pub fn set_tool_channel(t: &mut Tool, path: &str, value: &Value) -> Result<()> {
 /// Every channel of a volume shape with its current value, in order.
 #[must_use]
 pub fn shape_channels(s: &Shape) -> Vec<(String, Value)> {
-    let mut copy = *s;
+    let mut copy = s.clone();
     let mut out = Vec::new();
     visit_shape(&mut copy, &mut |p, slot| {
         out.push((p.to_owned(), slot.get()))

@@ -15,10 +15,11 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result, check_finite};
+use crate::spline::SplineControl;
 use crate::stack::{CHUNK, PARALLEL_THRESHOLD};
 
 /// The shape of an influence volume in its own local frame (centred at the origin).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum Shape {
     /// A ball of the given radius.
     Sphere {
@@ -37,6 +38,15 @@ pub enum Shape {
         /// Half the length of the axis segment (≥ 0).
         half_height: f32,
     },
+    /// A generalised cylinder around a curve: the points within `radius(t)` of the polyline
+    /// through `points`, the radius varying linearly along each segment from one point's
+    /// `radii` to the next one's (the ends are rounded, as a capsule's).
+    Tube {
+        /// The curve, at least 2 points (local frame).
+        points: Vec<Vec3>,
+        /// The radius at each point (> 0; as many as points).
+        radii: Vec<f32>,
+    },
 }
 
 impl Shape {
@@ -44,16 +54,17 @@ impl Shape {
     /// above 1 outside. For the box it is the largest of `|x|/hx, |y|/hy, |z|/hz`.
     #[must_use]
     pub fn normalized_distance(&self, local: Vec3) -> f32 {
-        match *self {
+        match self {
             Shape::Sphere { radius } => local.length() / radius,
-            Shape::Box { half_extents } => (local.abs() / half_extents).max_element(),
+            Shape::Box { half_extents } => (local.abs() / *half_extents).max_element(),
             Shape::Capsule {
                 radius,
                 half_height,
             } => {
-                let axis = Vec3::new(0.0, local.y.clamp(-half_height, half_height), 0.0);
+                let axis = Vec3::new(0.0, local.y.clamp(-half_height, *half_height), 0.0);
                 (local - axis).length() / radius
             }
+            Shape::Tube { points, radii } => tube_distance(points, radii, local),
         }
     }
 
@@ -61,13 +72,23 @@ impl Shape {
     /// `(min, max)`.
     #[must_use]
     pub fn local_bounds(&self) -> (Vec3, Vec3) {
-        let half = match *self {
-            Shape::Sphere { radius } => Vec3::splat(radius),
-            Shape::Box { half_extents } => half_extents,
+        let half = match self {
+            Shape::Sphere { radius } => Vec3::splat(*radius),
+            Shape::Box { half_extents } => *half_extents,
             Shape::Capsule {
                 radius,
                 half_height,
-            } => Vec3::new(radius, half_height + radius, radius),
+            } => Vec3::new(*radius, half_height + radius, *radius),
+            Shape::Tube { points, radii } => {
+                let r = Vec3::splat(radii.iter().copied().fold(0.0, f32::max));
+                let lo = points
+                    .iter()
+                    .fold(Vec3::splat(f32::INFINITY), |a, &p| a.min(p));
+                let hi = points
+                    .iter()
+                    .fold(Vec3::splat(f32::NEG_INFINITY), |a, &p| a.max(p));
+                return (lo - r, hi + r);
+            }
         };
         (-half, half)
     }
@@ -107,17 +128,38 @@ impl Shape {
             }
             Ok(())
         };
-        match *self {
-            Shape::Sphere { radius } => positive("radius", radius),
+        match self {
+            Shape::Sphere { radius } => positive("radius", *radius),
             Shape::Box { half_extents } => {
                 positive("half_extents.x", half_extents.x)?;
                 positive("half_extents.y", half_extents.y)?;
                 positive("half_extents.z", half_extents.z)
             }
+            Shape::Tube { points, radii } => {
+                if points.len() < 2 || points.len() != radii.len() || points.len() > MAX_TUBE_POINTS
+                {
+                    return Err(CoreError::Degenerate {
+                        what: what.to_owned(),
+                        problem: format!(
+                            "a tube needs 2 to {MAX_TUBE_POINTS} points and one radius per point, found {} points and {} radii",
+                            points.len(),
+                            radii.len()
+                        ),
+                    });
+                }
+                for (i, p) in points.iter().enumerate() {
+                    crate::error::check_finite_vec3(|| format!("{what}: point {i}"), *p)?;
+                }
+                for (i, &r) in radii.iter().enumerate() {
+                    positive(&format!("radius {i}"), r)?;
+                }
+                Ok(())
+            }
             Shape::Capsule {
                 radius,
                 half_height,
             } => {
+                let (radius, half_height) = (*radius, *half_height);
                 positive("radius", radius)?;
                 check_finite(|| format!("{what}: half_height"), half_height)?;
                 if half_height < 0.0 {
@@ -133,8 +175,31 @@ impl Shape {
     }
 }
 
+/// The most points a tube volume may have.
+pub const MAX_TUBE_POINTS: usize = 1024;
+
+/// Normalised distance of `p` from a tube: the smallest `|p − c| / r(c)` over the closest
+/// point `c` of each segment, with the radius interpolated linearly along the segment.
+fn tube_distance(points: &[Vec3], radii: &[f32], p: Vec3) -> f32 {
+    let mut best = f32::INFINITY;
+    for (w, r) in points.windows(2).zip(radii.windows(2)) {
+        let (a, b) = (w[0], w[1]);
+        let ab = b - a;
+        let len2 = ab.length_squared();
+        let t = if len2 > 0.0 {
+            ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let c = a + ab * t;
+        let radius = r[0] + (r[1] - r[0]) * t;
+        best = best.min(p.distance(c) / radius);
+    }
+    best
+}
+
 /// How the weight falls from 1 to 0 between the inner part of a volume and its boundary.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub enum Falloff {
     /// Weight 1 everywhere inside the volume, 0 outside.
     None,
@@ -143,14 +208,17 @@ pub enum Falloff {
     /// Weight falls along the smoothstep `s²(3 − 2s)`: zero slope at both ends.
     #[default]
     Smooth,
+    /// A custom curve: the weight is the spline control `F(s)` (clamped to `[0, 1]`) of the
+    /// same `s` (0 on the boundary, 1 at the inner plateau), so `F(s) = s` is `Linear`.
+    Curve(SplineControl),
 }
 
 impl Falloff {
     /// Weight at normalised distance `t`, with full weight up to `inner` (in `[0, 1)`):
     /// `s = (1 − t) / (1 − inner)` clamped to `[0, 1]`, then `None → [t ≤ 1]`, `Linear → s`,
-    /// `Smooth → s²(3 − 2s)`.
+    /// `Smooth → s²(3 − 2s)`, `Curve(F) → F(s)` clamped to `[0, 1]`.
     #[must_use]
-    pub fn weight(self, t: f32, inner: f32) -> f32 {
+    pub fn weight(&self, t: f32, inner: f32) -> f32 {
         if t > 1.0 {
             return 0.0;
         }
@@ -162,6 +230,26 @@ impl Falloff {
             Falloff::None => 1.0,
             Falloff::Linear => s,
             Falloff::Smooth => s * s * (3.0 - 2.0 * s),
+            Falloff::Curve(f) => f.eval(s).clamp(0.0, 1.0),
+        }
+    }
+
+    /// The falloff's name for messages and menus.
+    #[must_use]
+    pub fn name(&self) -> &'static str {
+        match self {
+            Falloff::None => "none",
+            Falloff::Linear => "linear",
+            Falloff::Smooth => "smooth",
+            Falloff::Curve(_) => "curve",
+        }
+    }
+
+    /// Checks a custom curve's control (finite values, degree). `what` names the influence.
+    pub fn validate(&self, what: &str) -> Result<()> {
+        match self {
+            Falloff::Curve(f) => f.validate(&format!("{what}: falloff curve")),
+            _ => Ok(()),
         }
     }
 }
@@ -336,7 +424,7 @@ impl Influence {
         for (i, v) in self.volumes.iter().enumerate() {
             v.shape.validate(&format!("{what}: volume {i}"))?;
         }
-        Ok(())
+        self.falloff.validate(what)
     }
 }
 
@@ -363,7 +451,7 @@ mod tests {
         ];
         for shape in shapes {
             let (lo, hi) = shape.bounds_in(&placement);
-            let volume = Volume::new(shape, placement, "v").unwrap();
+            let volume = Volume::new(shape.clone(), placement, "v").unwrap();
             let (a, b) = shape.local_bounds();
             // A grid over the local bounds: every point of the shape lies in the box.
             for i in 0..=20 {
@@ -378,6 +466,66 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_tube_measures_distance_to_its_curve_in_its_varying_radius() {
+        let tube = Shape::Tube {
+            points: vec![
+                Vec3::ZERO,
+                Vec3::new(2.0, 0.0, 0.0),
+                Vec3::new(2.0, 2.0, 0.0),
+            ],
+            radii: vec![0.5, 1.0, 0.5],
+        };
+        tube.validate("t").unwrap();
+        // On the curve: 0. Halfway along the first segment the radius is 0.75.
+        assert_eq!(tube.normalized_distance(Vec3::new(1.0, 0.0, 0.0)), 0.0);
+        assert!((tube.normalized_distance(Vec3::new(1.0, 0.0, 0.75)) - 1.0).abs() < 1e-6);
+        // Past the ends the tube is rounded: distance to the end point over its radius.
+        assert!((tube.normalized_distance(Vec3::new(-0.25, 0.0, 0.0)) - 0.5).abs() < 1e-6);
+        // The second segment is nearer for a point beside it.
+        assert!((tube.normalized_distance(Vec3::new(2.5, 1.0, 0.0)) - 0.5 / 0.75).abs() < 1e-6);
+        let (lo, hi) = tube.local_bounds();
+        assert_eq!(
+            (lo, hi),
+            (Vec3::new(-1.0, -1.0, -1.0), Vec3::new(3.0, 3.0, 1.0))
+        );
+        for bad in [
+            Shape::Tube {
+                points: vec![Vec3::ZERO],
+                radii: vec![1.0],
+            },
+            Shape::Tube {
+                points: vec![Vec3::ZERO, Vec3::X],
+                radii: vec![1.0],
+            },
+            Shape::Tube {
+                points: vec![Vec3::ZERO, Vec3::X],
+                radii: vec![1.0, 0.0],
+            },
+        ] {
+            assert!(bad.validate("t").is_err(), "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn a_curve_falloff_follows_its_spline() {
+        let linear = Falloff::Curve(SplineControl::identity(4, 3));
+        for k in 0..=10 {
+            let t = k as f32 / 10.0;
+            let a = linear.weight(t, 0.2);
+            let b = Falloff::Linear.weight(t, 0.2);
+            assert!((a - b).abs() < 1e-5, "{t}: {a} vs {b}");
+        }
+        // Values outside [0, 1] are clamped; a bad control is refused.
+        let over = Falloff::Curve(SplineControl::constant(1.5));
+        assert_eq!(over.weight(0.5, 0.0), 1.0);
+        let bad = Falloff::Curve(SplineControl {
+            values: vec![f32::NAN, 1.0],
+            degree: 1,
+        });
+        assert!(bad.validate("layer").is_err());
     }
 
     #[test]

@@ -24,6 +24,7 @@ pub mod normals;
 pub mod primitives;
 pub mod refinement;
 pub mod sketch;
+pub mod spline;
 pub mod stack;
 pub mod surface;
 pub mod tool;

@@ -171,7 +171,7 @@ impl Operation {
         match &doc.node(node)?.kind {
             NodeKind::Volume(v) => Ok(Operation::SetVolume {
                 node: node.to_owned(),
-                old: v.shape,
+                old: v.shape.clone(),
                 new,
             }),
             other => Err(wrong_kind(node, other, "volume")),
@@ -225,6 +225,16 @@ impl Operation {
             mesh: mesh.to_owned(),
             index,
             old: layer(doc, mesh, index)?.enabled,
+            new,
+        })
+    }
+
+    /// Solos (or unsolos) the layer at `index` of mesh `mesh`.
+    pub fn set_layer_solo(doc: &Document, mesh: &str, index: usize, new: bool) -> Result<Self> {
+        Ok(Operation::SetLayerSolo {
+            mesh: mesh.to_owned(),
+            index,
+            old: layer(doc, mesh, index)?.solo,
             new,
         })
     }

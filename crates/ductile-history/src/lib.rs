@@ -9,6 +9,7 @@
 
 #![warn(clippy::unwrap_used, clippy::expect_used)]
 
+pub mod authoring;
 mod check;
 pub mod edits;
 pub mod error;

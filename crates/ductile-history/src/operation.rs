@@ -148,6 +148,18 @@ pub enum Operation {
         /// Flag after.
         new: bool,
     },
+    /// Solos or unsolos a layer (when any layer of a stack is soloed, only the soloed layers
+    /// evaluate).
+    SetLayerSolo {
+        /// The mesh node.
+        mesh: String,
+        /// Position in the stack.
+        index: usize,
+        /// Flag before.
+        old: bool,
+        /// Flag after.
+        new: bool,
+    },
     /// Sets a layer's blend weight.
     SetLayerWeight {
         /// The mesh node.
@@ -364,6 +376,17 @@ impl Operation {
                 old: new,
                 new: old,
             },
+            O::SetLayerSolo {
+                mesh,
+                index,
+                old,
+                new,
+            } => O::SetLayerSolo {
+                mesh,
+                index,
+                old: new,
+                new: old,
+            },
             O::SetLayerInfluence {
                 mesh,
                 index,
@@ -471,6 +494,12 @@ impl Operation {
             O::SetLayerWeight {
                 mesh, index, new, ..
             } => format!("set weight of layer {index} of '{mesh}' to {new}"),
+            O::SetLayerSolo {
+                mesh, index, new, ..
+            } => format!(
+                "{} layer {index} of '{mesh}'",
+                if *new { "solo" } else { "unsolo" }
+            ),
             O::SetLayerInfluence { mesh, index, .. } => {
                 format!("set influence of layer {index} of '{mesh}'")
             }
@@ -647,7 +676,7 @@ impl Operation {
         match (self, next) {
             (O::SetTransform { new, .. }, O::SetTransform { new: n, .. }) => *new = *n,
             (O::SetTool { new, .. }, O::SetTool { new: n, .. }) => new.clone_from(n),
-            (O::SetVolume { new, .. }, O::SetVolume { new: n, .. }) => *new = *n,
+            (O::SetVolume { new, .. }, O::SetVolume { new: n, .. }) => new.clone_from(n),
             (O::SetMacroValue { new, .. }, O::SetMacroValue { new: n, .. }) => *new = *n,
             (O::SetLayerWeight { new, .. }, O::SetLayerWeight { new: n, .. }) => *new = *n,
             (O::SetLayerInfluence { new, .. }, O::SetLayerInfluence { new: n, .. }) => {
@@ -751,7 +780,7 @@ impl Operation {
                     check_shape(&format!("volume '{node}'"), target)?;
                 }
                 if let NodeKind::Volume(v) = &mut doc.nodes[i].kind {
-                    v.shape = *target;
+                    v.shape.clone_from(target);
                 }
                 Ok(())
             }
@@ -810,6 +839,23 @@ impl Operation {
                 })?;
                 if let Some(m) = mesh_mut(doc, i) {
                     m.stack[*index].enabled = *target;
+                }
+                Ok(())
+            }
+            O::SetLayerSolo {
+                mesh,
+                index,
+                old,
+                new,
+            } => {
+                let (expected, target) = dir.pick(old, new);
+                let (i, m) = mesh_at(doc, mesh)?;
+                let layer = layer_at(m, mesh, *index)?;
+                same(&layer.solo, expected, || {
+                    format!("mesh '{mesh}', layer {index}: solo")
+                })?;
+                if let Some(m) = mesh_mut(doc, i) {
+                    m.stack[*index].solo = *target;
                 }
                 Ok(())
             }

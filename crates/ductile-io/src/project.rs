@@ -671,6 +671,7 @@ fn op_sources(op: &mut Operation, f: &mut impl FnMut(&mut String)) {
         | Operation::MoveLayer { .. }
         | Operation::SetLayerEnabled { .. }
         | Operation::SetLayerWeight { .. }
+        | Operation::SetLayerSolo { .. }
         | Operation::SetLayerInfluence { .. }
         | Operation::DefineArea { .. }
         | Operation::SetMacroDefinition { .. }

@@ -136,6 +136,10 @@ pub struct LayerSpec {
     /// Disabled layers are skipped.
     #[serde(default = "yes")]
     pub enabled: bool,
+    /// Soloed layers: when any layer of a stack is soloed, only the soloed (and enabled)
+    /// layers are evaluated, to look at a few layers alone.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub solo: bool,
 }
 
 impl LayerSpec {
@@ -147,8 +151,14 @@ impl LayerSpec {
             influence: None,
             weight: 1.0,
             enabled: true,
+            solo: false,
         }
     }
+}
+
+#[allow(clippy::trivially_copy_pass_by_ref)] // serde's skip_serializing_if passes a reference.
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 fn one() -> f32 {

@@ -271,7 +271,7 @@ pub fn layer_falloff(doc: &Document, mesh: &str, layer: usize) -> Result<Vec<(St
                     v.shape.validate(name)?;
                     Ok((
                         name.clone(),
-                        falloff_plateau(&v.shape, inf.falloff, inf.inner),
+                        falloff_plateau(&v.shape, &inf.falloff, inf.inner),
                     ))
                 }
                 other => Err(wrong_kind(name, other, "volume")),

@@ -11,6 +11,7 @@
 #![warn(clippy::unwrap_used, clippy::expect_used)]
 
 pub mod channels;
+pub mod create;
 pub mod document;
 pub mod error;
 pub mod evaluator;

@@ -107,6 +107,8 @@ impl Document {
     ) -> Result<Vec<(Layer, Option<A>)>> {
         let node = self.mesh(mesh)?;
         let mut layers = Vec::with_capacity(node.stack.len());
+        // When a layer is soloed, only the soloed layers evaluate.
+        let solo = node.stack.iter().any(|l| l.solo);
         for (i, spec) in node.stack.iter().enumerate() {
             let tool_node = self.node(&spec.tool).map_err(|_| SceneError::UnknownTool {
                 mesh: mesh.to_owned(),
@@ -134,7 +136,11 @@ impl Document {
                             return Err(wrong_kind(v, &vnode.kind, "volume"));
                         };
                         let placement = self.to_mesh_space(v, mesh)?;
-                        volumes.push(Volume::new(vol.shape, placement, &format!("volume '{v}'"))?);
+                        volumes.push(Volume::new(
+                            vol.shape.clone(),
+                            placement,
+                            &format!("volume '{v}'"),
+                        )?);
                     }
                     if let Some(a) = &inf.area {
                         let def = node.areas.get(a).ok_or_else(|| SceneError::UnknownArea {
@@ -147,7 +153,7 @@ impl Document {
                     Some(Influence {
                         volumes,
                         area: None,
-                        falloff: inf.falloff,
+                        falloff: inf.falloff.clone(),
                         inner: inf.inner,
                         invert: inf.invert,
                     })
@@ -159,7 +165,7 @@ impl Document {
                     tool,
                     influence,
                     weight: spec.weight,
-                    enabled: spec.enabled,
+                    enabled: spec.enabled && (!solo || spec.solo),
                 },
                 vertices,
             ));
@@ -198,7 +204,8 @@ pub fn resolve_area(area: &Area, rest: &RestMesh, what: &str) -> Result<Vec<u32>
             let mut vols = Vec::with_capacity(shapes.len());
             for (k, s) in shapes.iter().enumerate() {
                 let placement = s.transform.affine();
-                let volume = Volume::new(s.shape, placement, &format!("{what}: shape {k}"))?;
+                let volume =
+                    Volume::new(s.shape.clone(), placement, &format!("{what}: shape {k}"))?;
                 vols.push((s.shape.bounds_in(&placement), volume));
             }
             rest.welded_positions()

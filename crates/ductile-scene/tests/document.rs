@@ -38,6 +38,7 @@ fn doc() -> Document {
                         }),
                         weight: 1.0,
                         enabled: true,
+                        solo: false,
                     }],
                     areas: [("left".to_string(), Area::Vertices(vec![0, 2]))].into(),
                 }),

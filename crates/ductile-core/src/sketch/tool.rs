@@ -18,7 +18,6 @@
 use glam::{Affine3A, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::basis::KnotVector;
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
 use crate::refinement::{LayerRefinement, SplitMesh, WholeDeform};
 use crate::sketch::bend::{Bend, TurningCurve, bend_point, rebuild};
@@ -31,6 +30,7 @@ use crate::sketch::skin::{Polyline, skin, virtual_vertex};
 use crate::sketch::smooth::Smoother;
 use crate::sketch::stroke::{filter_stroke, joint_curve, project_stroke, project_target_stroke};
 use crate::sketch::twist::{Axis, twist_point};
+pub use crate::spline::SplineControl;
 use crate::tool::{BindInput, Deformer};
 
 /// A stroke recorded in the image plane: pixel positions (origin top-left, y down) and the
@@ -125,82 +125,6 @@ fn transform_camera(c: &Camera, m: &Affine3A) -> Camera {
         target: m.transform_point3(c.target),
         up: m.transform_vector3(c.up),
         ..*c
-    }
-}
-
-/// A spline control `F(s) = Σᵢ N_{i,p}(s) cᵢ` over `s ∈ [0, 1]` (§5.3): a clamped uniform
-/// B-spline function of the given degree with one value per control point.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SplineControl {
-    /// Control values `cᵢ` (at least 2).
-    pub values: Vec<f32>,
-    /// Degree `p` (≥ 1, less than the number of values; default 3, lowered to
-    /// `values.len() − 1` when there are fewer values).
-    #[serde(default = "default_degree")]
-    pub degree: usize,
-}
-
-fn default_degree() -> usize {
-    3
-}
-
-impl SplineControl {
-    /// The control that reproduces `F(s) = s` exactly (control values at the Greville
-    /// abscissae), the paper's initial state for the turning-angle and twist-speed controls.
-    #[must_use]
-    pub fn identity(count: usize, degree: usize) -> Self {
-        let degree = degree.clamp(1, count.saturating_sub(1).max(1));
-        let values = match KnotVector::clamped_uniform(degree, count.max(2)) {
-            Some(k) => (0..k.count())
-                .map(|i| k.knots()[i + 1..=i + degree].iter().sum::<f32>() / degree as f32)
-                .collect(),
-            None => vec![0.0, 1.0],
-        };
-        Self { values, degree }
-    }
-
-    /// The constant control `F(s) = c`.
-    #[must_use]
-    pub fn constant(c: f32) -> Self {
-        Self {
-            values: vec![c, c],
-            degree: 1,
-        }
-    }
-
-    fn knots(&self) -> Option<KnotVector> {
-        let degree = self.degree.min(self.values.len().saturating_sub(1)).max(1);
-        KnotVector::clamped_uniform(degree, self.values.len())
-    }
-
-    fn validate(&self, what: &str) -> Result<()> {
-        for (i, &v) in self.values.iter().enumerate() {
-            check_finite(|| format!("{what}: value {i}"), v)?;
-        }
-        if self.values.len() < 2 || self.degree == 0 || self.degree > 15 {
-            return Err(CoreError::Degenerate {
-                what: what.to_owned(),
-                problem: format!(
-                    "a spline control needs at least 2 values and a degree in 1..=15, found {} values of degree {}",
-                    self.values.len(),
-                    self.degree
-                ),
-            });
-        }
-        Ok(())
-    }
-
-    /// `F(s)` at `s` (clamped to `[0, 1]`).
-    #[must_use]
-    pub fn eval(&self, s: f32) -> f32 {
-        let Some(k) = self.knots() else {
-            return self.values.first().copied().unwrap_or(0.0);
-        };
-        let mut basis = [0.0_f32; 16];
-        let span = k.basis(s.clamp(0.0, 1.0), &mut basis);
-        let p = k.degree();
-        (0..=p).map(|r| basis[r] * self.values[span - p + r]).sum()
     }
 }
 

@@ -717,3 +717,24 @@ fn a_changed_deformed_state_keeps_the_binding() {
     check_against_fresh(&ev, &Ok(u), &doc, &rest);
     assert!(ev.binds() > before);
 }
+
+/// A soloed layer evaluates alone: the same result as every other layer disabled.
+#[test]
+fn a_soloed_layer_evaluates_alone() {
+    let rest = rest();
+    let mut doc = scene();
+    let mut ev = MeshEvaluator::new("m", rest.clone());
+    ev.update(&doc).unwrap();
+    doc.mesh_mut("m").unwrap().stack[1].solo = true;
+    let u = ev.update(&doc).unwrap();
+    check_against_fresh(&ev, &Ok(u), &doc, &rest);
+    let mut alone = doc.clone();
+    for (i, l) in alone.mesh_mut("m").unwrap().stack.iter_mut().enumerate() {
+        l.solo = false;
+        l.enabled = i == 1;
+    }
+    assert_eq!(
+        bits(ev.deformed().unwrap()),
+        bits(&alone.evaluate("m", &rest).unwrap())
+    );
+}

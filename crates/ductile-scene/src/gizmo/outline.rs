@@ -27,15 +27,17 @@ pub fn volume_outline(shape: &Shape, scale: f32) -> Gizmo {
     let mut g = Gizmo::default();
     let role = Role::VolumeOutline;
     if !(scale > 0.0 && scale.is_finite()) {
-        match *shape {
-            Shape::Capsule { half_height, .. } if half_height > 0.0 => {
-                g.segment(Vec3::NEG_Y * half_height, Vec3::Y * half_height, role);
+        match shape {
+            Shape::Capsule { half_height, .. } if *half_height > 0.0 => {
+                g.segment(Vec3::NEG_Y * *half_height, Vec3::Y * *half_height, role);
             }
+            Shape::Tube { points, .. } => g.line(points.clone(), role),
             _ => g.point(Vec3::ZERO, role),
         }
         return g;
     }
-    match *shape {
+    match shape.clone() {
+        Shape::Tube { points, radii } => tube(&mut g, &points, &radii, scale, role),
         Shape::Sphere { radius } => {
             for n in [Vec3::X, Vec3::Y, Vec3::Z] {
                 g.circle(Vec3::ZERO, n, radius * scale, role);
@@ -68,6 +70,38 @@ pub fn volume_outline(shape: &Shape, scale: f32) -> Gizmo {
         }
     }
     g
+}
+
+/// A tube's outline: a circle across the curve at each point (radius scaled) and four lines
+/// along it, offset in a frame carried along the curve.
+fn tube(g: &mut Gizmo, points: &[Vec3], radii: &[f32], scale: f32, role: Role) {
+    let n = points.len();
+    if n < 2 {
+        return;
+    }
+    let tangent = |i: usize| {
+        let a = points[i.saturating_sub(1)];
+        let b = points[(i + 1).min(n - 1)];
+        (b - a).try_normalize().unwrap_or(Vec3::Y)
+    };
+    let mut side = tangent(0).any_orthonormal_vector();
+    let mut rails: [Vec<Vec3>; 4] = Default::default();
+    for i in 0..n {
+        let t = tangent(i);
+        // Carry the side vector along (remove its component along the tangent).
+        side = (side - t * side.dot(t))
+            .try_normalize()
+            .unwrap_or_else(|| t.any_orthonormal_vector());
+        let up = t.cross(side);
+        let r = radii.get(i).copied().unwrap_or(0.0) * scale;
+        g.circle(points[i], t, r, role);
+        for (rail, d) in rails.iter_mut().zip([side, up, -side, -up]) {
+            rail.push(points[i] + d * r);
+        }
+    }
+    for rail in rails {
+        g.line(rail, role);
+    }
 }
 
 /// The closed profile of a capsule of radius `r` and half height `a` around Y in the plane
@@ -110,11 +144,11 @@ pub(crate) fn parallelepiped(g: &mut Gizmo, origin: Vec3, edges: [Vec3; 3], role
 /// volume's outline. With an inverted influence the same surface is where the weight
 /// reaches 0. `inner` outside `[0, 1]` is clamped, NaN taken as 0.
 #[must_use]
-pub fn falloff_plateau(shape: &Shape, falloff: Falloff, inner: f32) -> Gizmo {
+pub fn falloff_plateau(shape: &Shape, falloff: &Falloff, inner: f32) -> Gizmo {
     let scale = match falloff {
         Falloff::None => 1.0,
-        Falloff::Linear | Falloff::Smooth if inner.is_finite() => inner.clamp(0.0, 1.0),
-        Falloff::Linear | Falloff::Smooth => 0.0,
+        _ if inner.is_finite() => inner.clamp(0.0, 1.0),
+        _ => 0.0,
     };
     volume_outline(shape, scale).with_role(Role::FalloffPlateau)
 }

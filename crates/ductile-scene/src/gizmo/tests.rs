@@ -425,7 +425,7 @@ proptest! {
         smooth in any::<bool>(),
     ) {
         let falloff = if smooth { Falloff::Smooth } else { Falloff::Linear };
-        let g = falloff_plateau(&s, falloff, inner);
+        let g = falloff_plateau(&s, &falloff, inner);
         prop_assert!(g.lines.iter().all(|l| l.role == Role::FalloffPlateau));
         prop_assert!(g.circles.iter().all(|c| c.role == Role::FalloffPlateau));
         let pts = g
@@ -444,16 +444,16 @@ proptest! {
 #[test]
 fn plateau_of_each_falloff() {
     let s = Shape::Sphere { radius: 2.0 };
-    let g = falloff_plateau(&s, Falloff::Smooth, 0.5);
+    let g = falloff_plateau(&s, &Falloff::Smooth, 0.5);
     assert!(
         g.circles
             .iter()
             .all(|c| c.radius == 1.0 && c.role == Role::FalloffPlateau)
     );
-    let g = falloff_plateau(&s, Falloff::None, 0.5);
+    let g = falloff_plateau(&s, &Falloff::None, 0.5);
     assert!(g.circles.iter().all(|c| c.radius == 2.0));
     // No plateau beyond the centre: only the centre point is drawn.
-    let g = falloff_plateau(&s, Falloff::Linear, 0.0);
+    let g = falloff_plateau(&s, &Falloff::Linear, 0.0);
     assert!(g.circles.is_empty() && g.lines.is_empty());
     assert_eq!(
         g.points,
