@@ -228,6 +228,7 @@ pub fn handle_operation(
     Ok(match moved(doc, node, id, local)? {
         NodeEdit::Tool(tool) => Operation::set_tool(doc, node, tool)?,
         NodeEdit::Transform(t) => Operation::set_transform(doc, node, t)?,
+        NodeEdit::Volume(shape) => Operation::set_volume(doc, node, shape)?,
     })
 }
 

@@ -278,8 +278,12 @@ impl Placement {
 /// bounds, with the hit triangle's outward normal; `None` when the ray misses.
 #[must_use]
 pub fn front_point(rest: &RestMesh) -> Option<SurfacePoint> {
-    let positions = rest.welded_positions();
-    let triangles = &rest.topology().triangles;
+    front_point_of(rest.welded_positions(), &rest.topology().triangles)
+}
+
+/// [`front_point`] of any triangle mesh (a deformed one, say).
+#[must_use]
+pub fn front_point_of(positions: &[Vec3], triangles: &[[u32; 3]]) -> Option<SurfacePoint> {
     let (min, max) = ductile_core::mesh::bounds(positions)?;
     let centre = 0.5 * (min + max);
     let bvh = Bvh::build(positions, triangles).ok()?;

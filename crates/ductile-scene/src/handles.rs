@@ -50,6 +50,8 @@ pub enum HandleId {
     Source(usize),
     /// The target (point plus displacement) of DOGME / Direct FFD constraint `k`.
     Target(usize),
+    /// Point `k` of a tube volume's curve.
+    Spine(usize),
 }
 
 impl HandleId {
@@ -74,6 +76,7 @@ impl fmt::Display for HandleId {
             HandleId::SurfaceMoved(i, j) => write!(f, "moved surface point ({i}, {j})"),
             HandleId::Source(k) => write!(f, "constraint point {k}"),
             HandleId::Target(k) => write!(f, "constraint target {k}"),
+            HandleId::Spine(k) => write!(f, "tube point {k}"),
         }
     }
 }
@@ -119,6 +122,8 @@ pub enum NodeEdit {
     Tool(Tool),
     /// The node's new local transform (`Operation::set_transform`).
     Transform(Transform),
+    /// The volume node's new shape (`Operation::set_volume`).
+    Volume(ductile_core::influence::Shape),
 }
 
 /// The handles of node `node`: its tool's handles ([`tool_handles`], tool nodes only), then
@@ -129,6 +134,19 @@ pub fn handles(doc: &Document, node: &str) -> Result<Vec<Handle>> {
     let n = doc.node(node)?;
     let mut out = match &n.kind {
         NodeKind::Tool(t) => tool_handles(t, node)?,
+        NodeKind::Volume(v) => match &v.shape {
+            ductile_core::influence::Shape::Tube { points, .. } => points
+                .iter()
+                .enumerate()
+                .map(|(k, &position)| Handle {
+                    id: HandleId::Spine(k),
+                    position,
+                    role: HandleRole::Control,
+                    radius: None,
+                })
+                .collect(),
+            _ => Vec::new(),
+        },
         _ => Vec::new(),
     };
     out.push(Handle {
@@ -167,6 +185,15 @@ pub fn moved(doc: &Document, node: &str, id: &HandleId, position: Vec3) -> Resul
             translation: position,
             ..n.transform
         }));
+    }
+    if let (HandleId::Spine(k), NodeKind::Volume(v)) = (id, &n.kind) {
+        let mut shape = v.shape.clone();
+        let ductile_core::influence::Shape::Tube { points, .. } = &mut shape else {
+            return Err(no_handle());
+        };
+        *points.get_mut(*k).ok_or_else(no_handle)? = position;
+        shape.validate(node)?;
+        return Ok(NodeEdit::Volume(shape));
     }
     let NodeKind::Tool(tool) = &n.kind else {
         return Err(no_handle());

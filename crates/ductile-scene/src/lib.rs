@@ -18,6 +18,7 @@ pub mod evaluator;
 pub mod gizmo;
 pub mod handles;
 pub mod resolve;
+pub mod sketching;
 pub mod symmetry;
 #[cfg(test)]
 mod test_tools;

@@ -10,6 +10,7 @@ fn apply(doc: &Document, node: &str, edit: NodeEdit) -> Document {
     match edit {
         NodeEdit::Tool(t) => n.kind = NodeKind::Tool(t),
         NodeEdit::Transform(t) => n.transform = t,
+        NodeEdit::Volume(shape) => n.kind = NodeKind::Volume(crate::document::VolumeNode { shape }),
     }
     doc
 }
@@ -64,6 +65,9 @@ fn moving_a_handle_to_its_own_position_changes_nothing() {
             let edit = moved(&doc, &n, &h.id, h.position).unwrap();
             match (edit, &node.kind) {
                 (NodeEdit::Tool(t), NodeKind::Tool(old)) => assert_eq!(&t, old, "{n} {}", h.id),
+                (NodeEdit::Volume(s), NodeKind::Volume(old)) => {
+                    assert_eq!(s, old.shape, "{n} {}", h.id);
+                }
                 (NodeEdit::Transform(t), _) => {
                     assert_eq!(h.id, HandleId::Origin);
                     assert_eq!(t, node.transform, "{n}");
@@ -257,4 +261,27 @@ fn an_invalid_tool_has_no_handles_but_an_error() {
         moved(&doc, "ffsd", &HandleId::Origin, Vec3::ONE),
         Ok(NodeEdit::Transform(_))
     ));
+}
+
+#[test]
+fn a_tube_volume_has_a_handle_per_point() {
+    let mut doc = document();
+    let shape = ductile_core::influence::Shape::Tube {
+        points: vec![Vec3::ZERO, Vec3::Y, Vec3::new(0.0, 2.0, 0.5)],
+        radii: vec![0.2, 0.3, 0.2],
+    };
+    doc.nodes.push(crate::document::Node {
+        name: "tube".into(),
+        parent: None,
+        transform: Transform::IDENTITY,
+        kind: NodeKind::Volume(crate::document::VolumeNode { shape }),
+    });
+    let h = handles(&doc, "tube").unwrap();
+    assert_eq!(h.len(), 4, "three points and the origin");
+    let edit = moved(&doc, "tube", &HandleId::Spine(1), Vec3::new(0.5, 1.0, 0.0)).unwrap();
+    let NodeEdit::Volume(ductile_core::influence::Shape::Tube { points, .. }) = edit else {
+        panic!("{edit:?}")
+    };
+    assert_eq!(points[1], Vec3::new(0.5, 1.0, 0.0));
+    assert!(moved(&doc, "tube", &HandleId::Spine(7), Vec3::ZERO).is_err());
 }
