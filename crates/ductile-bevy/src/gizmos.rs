@@ -57,8 +57,14 @@ pub fn role_color(role: Role) -> Color {
 }
 
 /// What the cached gizmos were built from: document revision, selected node, selected layer
-/// (mesh, index) and whether unselected macros are drawn.
-type GizmoKey = (u64, Option<String>, Option<(String, usize)>, bool);
+/// (mesh, index), hidden nodes and whether unselected macros are drawn.
+type GizmoKey = (
+    u64,
+    Option<String>,
+    Option<(String, usize)>,
+    std::collections::BTreeSet<String>,
+    bool,
+);
 
 /// World-space gizmos of the document, rebuilt when the document or selection changes.
 #[derive(Default)]
@@ -78,6 +84,9 @@ pub fn world_gizmos(
     for node in &doc.nodes {
         let selected = selection.is_selected(&node.name);
         if matches!(node.kind, NodeKind::Macro(_)) && !selected && !unselected_macros {
+            continue;
+        }
+        if selection.is_hidden(&node.name) {
             continue;
         }
         let (Ok(g), Ok(world)) = (gizmo(doc, &node.name), doc.world_transform(&node.name)) else {
@@ -116,6 +125,7 @@ pub fn draw_gizmos(
         doc.revision(),
         selection.node.clone(),
         selection.layer.clone(),
+        selection.hidden.clone(),
         settings.unselected_macros,
     );
     if cache.key.as_ref() != Some(&key) {

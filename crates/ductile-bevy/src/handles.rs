@@ -72,6 +72,9 @@ pub struct ActiveDrag {
     pub start: Vec3,
     /// The gesture id all the drag's edits share (one undo step).
     pub gesture: u64,
+    /// The other selected handles of the node moved along (by the same world offset), with
+    /// their world positions when the drag started.
+    pub with: Vec<(HandleId, Vec3)>,
 }
 
 /// True for the nodes whose origin handle shows even when they are not selected (so they
@@ -86,7 +89,7 @@ fn wanted_handles(doc: &Document, selection: &Selection) -> Vec<(String, HandleI
     let mut out = Vec::new();
     for node in &doc.nodes {
         let selected = selection.is_selected(&node.name);
-        if !selected && !shows_unselected_origin(&node.kind) {
+        if !selected && !shows_unselected_origin(&node.kind) || selection.is_hidden(&node.name) {
             continue;
         }
         let Ok(world) = doc.world_transform(&node.name) else {
@@ -144,7 +147,8 @@ pub fn sync_handles(
             let active = drag
                 .active
                 .as_ref()
-                .is_some_and(|d| d.node == node && &d.id == id);
+                .is_some_and(|d| d.node == node && &d.id == id)
+                || (selected && selection.handles.contains(id));
             if active {
                 a.active.clone()
             } else if selected {
@@ -250,26 +254,74 @@ pub fn axis_keys(keys: Option<Res<ButtonInput<KeyCode>>>, mut drag: ResMut<DragS
     }
 }
 
-/// A primary press on a handle selects its node; on a mesh, the mesh.
+/// A primary press on a handle selects its node and the handle (with Shift: adds the handle
+/// to the selected ones of that node, or removes it); on a mesh, the mesh.
 pub fn select_on_press(
     mut presses: MessageReader<Pointer<Press>>,
+    keys: Option<Res<ButtonInput<KeyCode>>>,
     mut selection: ResMut<Selection>,
     handles: Query<&HandleMarker>,
     nodes: Query<&crate::components::SceneNode, With<crate::components::MeshNodeMarker>>,
 ) {
+    let shift = keys
+        .as_ref()
+        .is_some_and(|k| k.any_pressed([KeyCode::ShiftLeft, KeyCode::ShiftRight]));
     for press in presses.read() {
         if press.event.button != PointerButton::Primary {
             continue;
         }
-        let name = match (handles.get(press.entity), nodes.get(press.entity)) {
-            (Ok(h), _) => h.node.clone(),
-            (_, Ok(n)) => n.name.clone(),
-            _ => continue,
-        };
-        if !selection.is_selected(&name) {
-            selection.node = Some(name);
+        match (handles.get(press.entity), nodes.get(press.entity)) {
+            (Ok(h), _) => {
+                let same_node = selection.is_selected(&h.node);
+                selection.select(Some(h.node.clone()));
+                if shift && same_node {
+                    if !selection.handles.remove(&h.id) {
+                        selection.handles.insert(h.id);
+                    }
+                } else if !selection.handles.contains(&h.id) {
+                    selection.handles.clear();
+                    selection.handles.insert(h.id);
+                }
+            }
+            (_, Ok(n)) => {
+                if !selection.is_selected(&n.name) {
+                    selection.select(Some(n.name.clone()));
+                }
+            }
+            _ => {}
         }
     }
+}
+
+/// The operation that moves handles `ids` of `node` to the world points `targets`, as one
+/// edit of the node (its tool or volume and, when the origin is among them, its transform):
+/// the handles are moved one after the other on a copy of the document, the origin last.
+pub fn handles_operation(
+    doc: &Document,
+    node: &str,
+    moves: &[(HandleId, Vec3)],
+) -> Result<Operation> {
+    let mut ordered: Vec<&(HandleId, Vec3)> = moves.iter().collect();
+    ordered.sort_by_key(|(id, _)| matches!(id, HandleId::Origin));
+    let mut scratch = doc.clone();
+    for (id, target) in ordered {
+        handle_operation(&scratch, node, id, *target)?.apply(&mut scratch)?;
+    }
+    let before = doc.node(node)?;
+    let after = scratch.node(node)?;
+    let mut ops = Vec::new();
+    if before.transform != after.transform {
+        ops.push(Operation::set_transform(doc, node, after.transform)?);
+    }
+    match &after.kind {
+        NodeKind::Tool(t) => ops.push(Operation::set_tool(doc, node, t.clone())?),
+        NodeKind::Volume(v) => ops.push(Operation::set_volume(doc, node, v.shape.clone())?),
+        _ => {}
+    }
+    Ok(Operation::Group {
+        label: format!("move {} handles of '{node}'", moves.len()),
+        ops,
+    })
 }
 
 /// Starts, continues and ends handle drags from bevy's picking messages. The snap modifier
@@ -296,14 +348,27 @@ pub fn drag_handles(
             continue;
         };
         if !selection.is_selected(&marker.node) {
-            selection.node = Some(marker.node.clone());
+            selection.select(Some(marker.node.clone()));
         }
+        // The other selected handles of the node come along.
+        let with: Vec<(HandleId, Vec3)> = if selection.handles.contains(&marker.id) {
+            markers
+                .iter()
+                .filter(|(m, _)| {
+                    m.node == marker.node && m.id != marker.id && selection.handles.contains(&m.id)
+                })
+                .map(|(m, t)| (m.id, t.translation()))
+                .collect()
+        } else {
+            Vec::new()
+        };
         let gesture = doc.bypass_change_detection().new_gesture();
         state.active = Some(ActiveDrag {
             node: marker.node.clone(),
             id: marker.id,
             start: at.translation(),
             gesture,
+            with,
         });
     }
     let last = drags
@@ -326,7 +391,16 @@ pub fn drag_handles(
             state.constraint,
             snap,
         ) {
-            match handle_operation(doc.document(), &active.node, &active.id, target) {
+            let op = if active.with.is_empty() {
+                handle_operation(doc.document(), &active.node, &active.id, target)
+            } else {
+                let delta = target - active.start;
+                let moves: Vec<(HandleId, Vec3)> = std::iter::once((active.id, target))
+                    .chain(active.with.iter().map(|(id, p)| (*id, *p + delta)))
+                    .collect();
+                handles_operation(doc.document(), &active.node, &moves)
+            };
+            match op {
                 Ok(op) => {
                     edits.write(DocumentCommand::Apply {
                         op: Box::new(op),

@@ -112,6 +112,7 @@ impl Plugin for DuctilePlugin {
                     (
                         sync_document_entities.run_if(resource_changed::<SceneDocument>),
                         sync_handles,
+                        crate::selection::apply_hidden,
                     )
                         .chain()
                         .in_set(DuctileSystems::Sync),

@@ -1,6 +1,10 @@
-//! What the user has selected: a node, and a layer of a mesh's stack.
+//! What the user has selected: a node, a layer of a mesh's stack, some handles of the
+//! selected node; and which nodes are hidden in the viewport.
+
+use std::collections::BTreeSet;
 
 use bevy::prelude::*;
+use ductile_scene::handles::HandleId;
 
 /// The selection. Views read and write it directly: it is view state, not document state,
 /// so it is not part of the history.
@@ -10,6 +14,12 @@ pub struct Selection {
     pub node: Option<String>,
     /// The selected layer: mesh node name and index in its stack.
     pub layer: Option<(String, usize)>,
+    /// Selected handles of the selected node (Shift-click adds or removes one, a box
+    /// selects several); dragging one of them moves them all, as one undo step.
+    pub handles: BTreeSet<HandleId>,
+    /// Nodes hidden in the viewport (their meshes, gizmos and handles are not drawn; they
+    /// still deform and export).
+    pub hidden: BTreeSet<String>,
 }
 
 impl Selection {
@@ -17,5 +27,37 @@ impl Selection {
     #[must_use]
     pub fn is_selected(&self, node: &str) -> bool {
         self.node.as_deref() == Some(node)
+    }
+
+    /// Selects `node` (a different node clears the handle selection).
+    pub fn select(&mut self, node: Option<String>) {
+        if self.node != node {
+            self.handles.clear();
+        }
+        self.node = node;
+    }
+
+    /// True when `node` is hidden.
+    #[must_use]
+    pub fn is_hidden(&self, node: &str) -> bool {
+        self.hidden.contains(node)
+    }
+}
+
+/// Hides the entities of hidden nodes.
+pub fn apply_hidden(
+    selection: Res<Selection>,
+    mut nodes: Query<(&crate::components::SceneNode, &mut Visibility)>,
+) {
+    if !selection.is_changed() {
+        return;
+    }
+    for (node, mut visibility) in &mut nodes {
+        let wanted = if selection.is_hidden(&node.name) {
+            Visibility::Hidden
+        } else {
+            Visibility::Inherited
+        };
+        visibility.set_if_neq(wanted);
     }
 }

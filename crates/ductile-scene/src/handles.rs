@@ -28,7 +28,7 @@ use crate::error::{Result, SceneError};
 use crate::transform::Transform;
 
 /// Identifies one handle of a node. Indices count from 0 in the tool's own lists.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum HandleId {
     /// The node's origin (its translation, in the parent's frame). Every node has it.
     Origin,

@@ -78,16 +78,23 @@ pub fn orbit_camera(
     hover: Option<Res<bevy::picking::hover::HoverMap>>,
     handles: Query<(), With<HandleMarker>>,
     mut orbiting: Local<bool>,
+    sketch: Res<crate::sketch::SketchState>,
     mut cameras: Query<(&mut OrbitCamera, &mut Transform, &Projection)>,
 ) {
     let Ok((mut orbit, mut transform, projection)) = cameras.single_mut() else {
         return;
     };
     let shift = keys.any_pressed([KeyCode::ShiftLeft, KeyCode::ShiftRight]);
-    let any_button = [MouseButton::Left, MouseButton::Middle, MouseButton::Right];
+    // In sketch mode the left button draws: only the middle and right buttons move the view.
+    let any_button: &[MouseButton] = if sketch.active() {
+        &[MouseButton::Middle, MouseButton::Right]
+    } else {
+        &[MouseButton::Left, MouseButton::Middle, MouseButton::Right]
+    };
+    let any_button = any_button.iter().copied();
     // A gesture starts only over the viewport and not on a handle; it continues until the
     // buttons are released, wherever the pointer goes.
-    if buttons.any_just_pressed(any_button) {
+    if buttons.any_just_pressed(any_button.clone()) {
         let on_handle = hover.as_ref().is_some_and(|h| {
             h.values()
                 .any(|hits| hits.keys().any(|e| handles.contains(*e)))

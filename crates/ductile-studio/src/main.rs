@@ -4,10 +4,12 @@
 //! or history file; `--screenshot OUT.png [--frames N]` renders N frames, writes a PNG and
 //! exits (for automated checks, also under `xvfb-run` with software Vulkan).
 
+mod authoring;
 mod camera;
 mod files;
 mod panels;
 mod screenshot;
+mod sketch;
 mod studio;
 mod ui;
 

@@ -60,7 +60,7 @@ impl Plugin for StudioPlugin {
         .insert_resource(ClearColor(Color::srgb(0.16, 0.17, 0.19)))
         .insert_resource(Selection {
             node: self.select.clone(),
-            layer: None,
+            ..Selection::default()
         })
         .init_resource::<ViewOptions>()
         .init_resource::<PointerOverViewport>()
@@ -70,13 +70,15 @@ impl Plugin for StudioPlugin {
         .init_resource::<Gestures>()
         .init_resource::<FileDialogs>()
         .init_resource::<crate::camera::FrameRequest>()
+        .init_resource::<crate::sketch::SketchState>()
         .add_message::<StudioAction>()
+        .add_message::<crate::authoring::AddNode>()
         .add_systems(Startup, setup)
         .add_systems(EguiPrimaryContextPass, studio_ui)
         .add_systems(
             Update,
             (
-                (shortcuts, run_actions)
+                (shortcuts, run_actions, crate::authoring::add_nodes, crate::sketch::sketch_input)
                     .chain()
                     .before(DuctileSystems::Input),
                 load_rest_meshes
@@ -179,13 +181,18 @@ fn shortcuts(
     keyboard: Res<KeyboardToViewport>,
     drag: Res<DragState>,
     mut selection: ResMut<Selection>,
+    sketch: Res<crate::sketch::SketchState>,
     mut actions: MessageWriter<StudioAction>,
 ) {
     if !keyboard.0 {
         return;
     }
-    if keys.just_pressed(KeyCode::Escape) && drag.active.is_none() && selection.node.is_some() {
-        selection.node = None;
+    if keys.just_pressed(KeyCode::Escape)
+        && drag.active.is_none()
+        && !sketch.active()
+        && selection.node.is_some()
+    {
+        selection.select(None);
     }
     // A modifier released in the same frame as the key still counts: at low frame rates
     // (software rendering) a quick Ctrl+Z arrives as press and release of both in one frame.

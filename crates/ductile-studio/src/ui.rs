@@ -7,8 +7,10 @@ use bevy::prelude::*;
 use bevy_egui::{EguiContexts, egui};
 use ductile_bevy::prelude::*;
 
+use crate::authoring::AddNode;
 use crate::camera::{KeyboardToViewport, PointerOverViewport};
 use crate::files::{FileDialogs, StudioAction};
+use crate::panels::add_menu::AddPopup;
 use crate::panels::history::HistoryPanel;
 use crate::panels::inspector::Inspector;
 use crate::panels::macros::MacrosPanel;
@@ -16,7 +18,8 @@ use crate::panels::menu_bar::{MenuAction, MenuBar, ViewOptions};
 use crate::panels::outliner::Outliner;
 use crate::panels::stack::StackPanel;
 use crate::panels::status_bar::{StatusBar, StatusInfo};
-use crate::panels::{Gestures, PanelContext};
+use crate::panels::{Gestures, PanelContext, PanelRequest};
+use crate::sketch::SketchState;
 use crate::studio::{Notices, OpenProject};
 
 /// The panels' own state.
@@ -29,6 +32,7 @@ pub struct PanelState {
     inspector: Inspector,
     macros: MacrosPanel,
     status: StatusBar,
+    add_popup: AddPopup,
     frame_ms: Option<f64>,
 }
 
@@ -49,6 +53,15 @@ pub struct UiInputs<'w, 's> {
     evaluations: Query<'w, 's, &'static MeshEvaluation>,
 }
 
+/// What the UI writes besides its own state.
+#[derive(SystemParam)]
+pub struct UiOutputs<'w> {
+    edits: MessageWriter<'w, DocumentCommand>,
+    actions: MessageWriter<'w, StudioAction>,
+    adds: MessageWriter<'w, AddNode>,
+    sketch: ResMut<'w, SketchState>,
+}
+
 /// Draws every panel and forwards what they asked for.
 #[allow(clippy::too_many_arguments)]
 pub fn studio_ui(
@@ -63,9 +76,14 @@ pub fn studio_ui(
     mut viewport: ResMut<ViewportRect>,
     mut over: ResMut<PointerOverViewport>,
     mut keyboard: ResMut<KeyboardToViewport>,
-    mut edits: MessageWriter<DocumentCommand>,
-    mut actions: MessageWriter<StudioAction>,
+    outputs: UiOutputs,
 ) -> Result {
+    let UiOutputs {
+        mut edits,
+        mut actions,
+        mut adds,
+        mut sketch,
+    } = outputs;
     let ctx = contexts.ctx_mut()?.clone();
     let panels = &mut *panels;
     let dt = f64::from(inputs.time.delta_secs()) * 1000.0;
@@ -83,15 +101,18 @@ pub fn studio_ui(
         doc: &inputs.doc,
         selection: &mut selection,
         commands: Vec::new(),
+        requests: Vec::new(),
         gestures: &mut gestures,
+        now: inputs.time.elapsed_secs_f64(),
     };
     let has_selection = cx.selection.node.is_some();
+    let has_mesh = !inputs.doc.document().mesh_names().is_empty();
 
     let mut menu_action = None;
     let top = egui::Panel::top("menu-bar").show(&mut root, |ui| {
         menu_action = panels
             .menu
-            .show(ui, &inputs.doc, has_selection, &mut view, &mut heat);
+            .show(ui, &inputs.doc, has_selection, has_mesh, &mut view, &mut heat);
     });
 
     let info = status_info(&inputs, panels.frame_ms);
@@ -128,11 +149,52 @@ pub fn studio_ui(
         actions.write(a);
     }
 
+    // The Add popup at the cursor (Shift+A over the viewport, as in Blender).
+    let cursor = ctx.pointer_latest_pos();
+    if !ctx.text_edit_focused()
+        && ctx.input(|i| i.modifiers.shift && i.key_pressed(egui::Key::A))
+        && over.0
+        && let Some(at) = cursor
+    {
+        panels.add_popup.open_at = Some(at);
+    }
+    let popup_at = panels.add_popup.open_at;
+    if let Some(request) = panels.add_popup.show(&ctx, has_mesh) {
+        adds.write(AddNode {
+            request,
+            cursor: popup_at.map(|p| Vec2::new(p.x, p.y)),
+        });
+    }
+
     let commands = std::mem::take(&mut cx.commands);
     for c in commands {
         edits.write(c);
     }
-    if let Some(a) = menu_action {
+    for r in std::mem::take(&mut cx.requests) {
+        match r {
+            PanelRequest::RedrawSketch(node) => {
+                let doc = inputs.doc.document();
+                let mesh = crate::authoring::mesh_in_focus(doc, cx.selection);
+                let kind = match doc.node(&node).map(|n| &n.kind) {
+                    Ok(ductile_scene::document::NodeKind::Tool(ductile_core::tool::Tool::Sketch(t)))
+                        if matches!(t.mode, ductile_core::sketch::tool::SketchMode::Twist { .. }) =>
+                    {
+                        ductile_scene::sketching::SketchKind::Twist
+                    }
+                    _ => ductile_scene::sketching::SketchKind::Bend,
+                };
+                if let Some(mesh) = mesh {
+                    sketch.begin(&mesh, kind, Some(node));
+                }
+            }
+        }
+    }
+    if let Some(MenuAction::Add(request)) = menu_action {
+        adds.write(AddNode {
+            request,
+            cursor: None,
+        });
+    } else if let Some(a) = menu_action {
         actions.write(match a {
             MenuAction::New => StudioAction::New,
             MenuAction::Open => StudioAction::Open,
@@ -145,6 +207,7 @@ pub fn studio_ui(
             MenuAction::Redo => StudioAction::Redo,
             MenuAction::Delete => StudioAction::Delete,
             MenuAction::FrameSelected => StudioAction::FrameSelected,
+            MenuAction::Add(_) => unreachable!("handled above"),
         });
     }
 
@@ -161,6 +224,39 @@ pub fn studio_ui(
     });
     if viewport.0 != wanted {
         viewport.0 = wanted;
+    }
+    // Sketch mode: the strokes and the hint over the 3-D view.
+    if sketch.active() {
+        let painter = ctx.layer_painter(egui::LayerId::new(
+            egui::Order::Foreground,
+            egui::Id::new("sketch-overlay"),
+        ));
+        let painter = painter.with_clip_rect(free);
+        for (points, [r, g, b]) in sketch.strokes() {
+            let line: Vec<egui::Pos2> = points
+                .iter()
+                .map(|p| egui::pos2(free.min.x + p.x, free.min.y + p.y))
+                .collect();
+            painter.add(egui::Shape::line(
+                line,
+                egui::Stroke::new(2.5, egui::Color32::from_rgb(r, g, b)),
+            ));
+        }
+        if let Some(hint) = sketch.hint() {
+            let at = free.left_top() + egui::vec2(10.0, 10.0);
+            let galley = painter.layout(
+                hint,
+                egui::FontId::proportional(14.0),
+                egui::Color32::WHITE,
+                free.width() - 20.0,
+            );
+            painter.rect_filled(
+                egui::Rect::from_min_size(at, galley.size()).expand(5.0),
+                4.0,
+                egui::Color32::from_black_alpha(170),
+            );
+            painter.galley(at, galley, egui::Color32::WHITE);
+        }
     }
     let pointer_in_free = ctx.pointer_latest_pos().is_some_and(|p| free.contains(p));
     // Over the free rectangle and not over a window (dialog, menu) on top of it.

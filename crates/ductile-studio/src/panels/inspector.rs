@@ -1,40 +1,40 @@
-//! The inspector: the selected node's name, transform and kind-specific values.
+//! The inspector: the selected node's name, parent and transform, then its kind's section —
+//! every parameter of every tool kind ([`super::tool_editor`]), a volume's shape and sizes, a
+//! macro tool's value — and, when a layer is selected, its influence
+//! ([`super::influence`]).
 
 use bevy::math::{EulerRot, Quat, Vec3};
 use bevy_egui::egui;
-use ductile_core::influence::Shape;
-use ductile_core::tool::Tool;
 use ductile_history::operation::Operation;
 use ductile_scene::document::NodeKind;
 use ductile_scene::transform::Transform;
 
 use super::PanelContext;
+use super::influence::InfluenceEditor;
+use super::tool_editor::ToolEditor;
 
 /// The inspector panel.
 #[derive(Debug, Default)]
 pub struct Inspector {
     rename: Option<(String, String)>,
-}
-
-fn tool_summary(tool: &Tool) -> String {
-    let json = format!("{tool:?}");
-    let kind = json.split('(').next().unwrap_or("tool").to_owned();
-    match tool {
-        Tool::Ffsd(t) => format!("FFSD, {} control points, gain {}", t.points.len(), t.gain),
-        _ => kind,
-    }
+    tool: ToolEditor,
+    influence: InfluenceEditor,
 }
 
 impl Inspector {
     /// Draws the selected node's properties.
     pub fn show(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>) {
         let doc = cx.doc.document();
+        if let Some((mesh, index)) = cx.selection.layer.clone() {
+            self.influence.show_layer(ui, cx, &mesh, index);
+            ui.separator();
+        }
         let Some(name) = cx.selection.node.clone() else {
-            ui.weak("Select a node in the outliner, a handle in the viewport or a macro slider.");
+            ui.weak("Select a node in the outliner, a handle in the viewport or a macro slider; Add (Shift+A) makes new tools and volumes.");
             return;
         };
         let Ok(node) = doc.node(&name) else {
-            cx.selection.node = None;
+            cx.selection.select(None);
             return;
         };
         // Name (rename on Enter or focus loss).
@@ -51,7 +51,7 @@ impl Inspector {
             if r.lost_focus() && *text != name && !text.trim().is_empty() {
                 let new = text.trim().to_owned();
                 cx.apply(Operation::rename(&name, &new));
-                cx.selection.node = Some(new);
+                cx.selection.select(Some(new));
             }
         });
         ui.label(format!("Kind: {}", node.kind.name()));
@@ -79,78 +79,11 @@ impl Inspector {
                 }
             }
             NodeKind::Tool(tool) => {
-                ui.label(tool_summary(tool));
-                if let Tool::Ffsd(f) = tool {
-                    for (i, p) in f.points.iter().enumerate() {
-                        ui.horizontal(|ui| {
-                            ui.label(format!("point {i}"));
-                            let mut q = *p;
-                            let a = ui
-                                .add(egui::DragValue::new(&mut q.gamma).speed(0.005).prefix("γ "));
-                            let b = ui.add(
-                                egui::DragValue::new(&mut q.alpha)
-                                    .range(0.05..=8.0)
-                                    .speed(0.01)
-                                    .prefix("α "),
-                            );
-                            let c = ui.add(
-                                egui::DragValue::new(&mut q.epsilon)
-                                    .range(1e-4..=100.0)
-                                    .speed(0.001)
-                                    .prefix("ε "),
-                            );
-                            for r in [a, b, c] {
-                                if r.changed() {
-                                    let mut t = f.clone();
-                                    t.points[i] = q;
-                                    if let Ok(op) = Operation::set_tool(doc, &name, Tool::Ffsd(t)) {
-                                        cx.apply_in_gesture(&r, op, format!("edit '{name}'"));
-                                    }
-                                }
-                            }
-                        });
-                    }
-                }
-                ui.weak("Drag the handles in the viewport (X/Y/Z constrain, Ctrl snaps).");
+                self.tool.show(ui, cx, &name, tool);
+                ui.weak("Drag the handles in the viewport (X/Y/Z constrain, Ctrl snaps, Shift-click selects several).");
             }
             NodeKind::Volume(v) => {
-                let mut shape = v.shape;
-                let changed = match &mut shape {
-                    Shape::Sphere { radius } => ui
-                        .add(
-                            egui::DragValue::new(radius)
-                                .range(1e-4..=1e4)
-                                .speed(0.001)
-                                .prefix("radius "),
-                        )
-                        .changed(),
-                    Shape::Box { half_extents } => vec3_edit(ui, half_extents, "half "),
-                    Shape::Capsule {
-                        half_height,
-                        radius,
-                    } => {
-                        let a = ui
-                            .add(
-                                egui::DragValue::new(half_height)
-                                    .range(0.0..=1e4)
-                                    .speed(0.001)
-                                    .prefix("half length "),
-                            )
-                            .changed();
-                        let b = ui
-                            .add(
-                                egui::DragValue::new(radius)
-                                    .range(1e-4..=1e4)
-                                    .speed(0.001)
-                                    .prefix("radius "),
-                            )
-                            .changed();
-                        a || b
-                    }
-                };
-                if changed && let Ok(op) = Operation::set_volume(doc, &name, shape) {
-                    cx.apply(op);
-                }
+                self.influence.show_volume(ui, cx, &name, &v.shape);
             }
             NodeKind::Mesh(m) => {
                 ui.label(format!("Source: {}", m.source));
@@ -214,21 +147,4 @@ impl Inspector {
             cx.apply_in_gesture(r, op, format!("move '{name}'"));
         }
     }
-}
-
-fn vec3_edit(ui: &mut egui::Ui, v: &mut Vec3, prefix: &str) -> bool {
-    let mut changed = false;
-    ui.horizontal(|ui| {
-        for (c, axis) in [(&mut v.x, "x"), (&mut v.y, "y"), (&mut v.z, "z")] {
-            changed |= ui
-                .add(
-                    egui::DragValue::new(c)
-                        .range(1e-4..=1e4)
-                        .speed(0.001)
-                        .prefix(format!("{prefix}{axis} ")),
-                )
-                .changed();
-        }
-    });
-    changed
 }

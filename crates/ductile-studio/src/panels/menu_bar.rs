@@ -4,9 +4,13 @@ use bevy_egui::egui;
 
 use ductile_bevy::prelude::*;
 
+use super::add_menu::{AddRequest, add_menu_contents};
+
 /// What the user picked in the menu bar (carried out by the Studio after the UI pass).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MenuAction {
+    /// Add ▸ something (also Shift+A in the viewport).
+    Add(AddRequest),
     /// File ▸ New.
     New,
     /// File ▸ Open…
@@ -63,6 +67,7 @@ impl MenuBar {
         ui: &mut egui::Ui,
         doc: &SceneDocument,
         has_selection: bool,
+        has_mesh: bool,
         view: &mut ViewOptions,
         heat: &mut HeatMapSettings,
     ) -> Option<MenuAction> {
@@ -129,6 +134,13 @@ impl MenuBar {
                     action = Some(MenuAction::Delete);
                     ui.close();
                 }
+            });
+            ui.menu_button("Add", |ui| {
+                if let Some(r) = add_menu_contents(ui, has_mesh) {
+                    action = Some(MenuAction::Add(r));
+                }
+                ui.separator();
+                ui.weak("Shift+A in the viewport: at the cursor");
             });
             ui.menu_button("View", |ui| {
                 ui.checkbox(&mut view.grid, "Grid");

@@ -2,17 +2,32 @@
 //! document and emit [`DocumentCommand`]s into [`PanelContext::commands`]; they never
 //! mutate the document.
 
+pub mod add_menu;
+pub mod curve_editor;
 pub mod history;
+pub mod influence;
 pub mod inspector;
 pub mod macros;
 pub mod menu_bar;
 pub mod outliner;
+pub mod params;
 pub mod stack;
 pub mod status_bar;
+pub mod tool_editor;
+
+#[cfg(test)]
+mod tests;
 
 use bevy_egui::egui;
 use ductile_bevy::prelude::*;
 use ductile_history::operation::Operation;
+
+/// What a panel asks the Studio for besides document edits.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PanelRequest {
+    /// Redraw the strokes of this sketch tool node in sketch mode.
+    RedrawSketch(String),
+}
 
 /// What every panel may read and the edits it may ask for.
 pub struct PanelContext<'a> {
@@ -22,8 +37,12 @@ pub struct PanelContext<'a> {
     pub selection: &'a mut Selection,
     /// Edits requested this frame, applied after the UI pass.
     pub commands: Vec<DocumentCommand>,
+    /// Other requests of this frame (adding nodes, sketch mode).
+    pub requests: Vec<PanelRequest>,
     /// Source of gesture ids for sliders and drags.
     pub gestures: &'a mut Gestures,
+    /// Seconds since the Studio started (for playback).
+    pub now: f64,
 }
 
 impl PanelContext<'_> {

@@ -1,9 +1,10 @@
-//! The stack panel: the layers of the selected mesh (or of the mesh whose layer is
-//! selected), bottom first, with enable, weight, order and removal.
+//! The stack panel: the layers of the mesh in focus, bottom first — enable, solo, weight,
+//! drag a layer onto another to reorder, duplicate, remove; clicking a layer selects it (the
+//! inspector then shows its influence) and its tool.
 
 use bevy_egui::egui;
 use ductile_history::operation::Operation;
-use ductile_scene::document::{LayerSpec, NodeKind};
+use ductile_scene::document::{InfluenceSpec, LayerSpec, NodeKind};
 
 use super::PanelContext;
 
@@ -13,121 +14,236 @@ pub struct StackPanel {
     add_tool: String,
 }
 
+/// What a dragged layer carries: its mesh and index.
+#[derive(Debug, Clone, PartialEq)]
+struct DraggedLayer(String, usize);
+
+/// A short description of a layer's influence.
+fn influence_summary(inf: Option<&InfluenceSpec>) -> String {
+    let Some(inf) = inf else {
+        return "all vertices".to_owned();
+    };
+    let mut parts = Vec::new();
+    if let Some(a) = &inf.area {
+        parts.push(format!("area {a}"));
+    }
+    if !inf.volumes.is_empty() {
+        parts.push(format!(
+            "{} {}",
+            if inf.invert { "minus" } else { "in" },
+            inf.volumes.join(", ")
+        ));
+    }
+    if parts.is_empty() {
+        "all vertices".to_owned()
+    } else {
+        parts.join(", ")
+    }
+}
+
 impl StackPanel {
+    /// The mesh the stack panel shows: the selected layer's, the selected mesh, the mesh a
+    /// selected node is parented under, or the first mesh.
+    #[must_use]
+    pub fn mesh_in_focus(cx: &PanelContext<'_>) -> Option<String> {
+        let doc = cx.doc.document();
+        if let Some((m, _)) = &cx.selection.layer {
+            return Some(m.clone());
+        }
+        let mut current = cx.selection.node.clone();
+        for _ in 0..=doc.nodes.len() {
+            let Some(name) = current else { break };
+            let Ok(node) = doc.node(&name) else { break };
+            if matches!(node.kind, NodeKind::Mesh(_)) {
+                return Some(name);
+            }
+            current = node.parent.clone();
+        }
+        doc.mesh_names().first().map(|s| (*s).to_owned())
+    }
+
     /// Draws the stack of the mesh in focus.
     pub fn show(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>) {
         let doc = cx.doc.document();
-        let mesh_name = match (&cx.selection.layer, &cx.selection.node) {
-            (Some((m, _)), _) => Some(m.clone()),
-            (None, Some(n)) if matches!(doc.node(n).map(|n| &n.kind), Ok(NodeKind::Mesh(_))) => {
-                Some(n.clone())
-            }
-            _ => doc.mesh_names().first().map(|s| (*s).to_owned()),
-        };
-        let Some(mesh_name) = mesh_name else {
+        let Some(mesh_name) = Self::mesh_in_focus(cx) else {
             ui.weak("No mesh in the scene. File ▸ Import mesh… adds one.");
             return;
         };
         let Ok(mesh) = doc.mesh(&mesh_name) else {
             return;
         };
+        let soloed = mesh.stack.iter().any(|l| l.solo);
         ui.label(format!(
-            "Stack of '{mesh_name}' ({} layers, top last)",
-            mesh.stack.len()
+            "Stack of '{mesh_name}' ({} layers, top last{})",
+            mesh.stack.len(),
+            if soloed { ", soloed layers only" } else { "" }
         ));
         let count = mesh.stack.len();
+        let mut moved: Option<(usize, usize)> = None;
         egui::ScrollArea::vertical()
             .id_salt("stack")
             .max_height(220.0)
             .show(ui, |ui| {
                 for (i, layer) in mesh.stack.iter().enumerate() {
-                    ui.horizontal(|ui| {
-                        let mut enabled = layer.enabled;
-                        if ui
-                            .checkbox(&mut enabled, "")
-                            .on_hover_text("Enabled")
-                            .changed()
-                            && let Ok(op) =
-                                Operation::set_layer_enabled(doc, &mesh_name, i, enabled)
-                        {
-                            cx.apply(op);
-                        }
-                        let selected = cx.selection.layer == Some((mesh_name.clone(), i));
-                        if ui.selectable_label(selected, &layer.tool).clicked() {
-                            cx.selection.layer = Some((mesh_name.clone(), i));
-                            cx.selection.node = Some(layer.tool.clone());
-                        }
-                        let mut weight = layer.weight;
-                        let r = ui.add(
-                            egui::DragValue::new(&mut weight)
-                                .range(0.0..=1.0)
-                                .speed(0.005)
-                                .prefix("w "),
-                        );
-                        if r.changed()
-                            && let Ok(op) = Operation::set_layer_weight(doc, &mesh_name, i, weight)
-                        {
-                            let label = format!("weight of layer {i} of '{mesh_name}'");
-                            cx.apply_in_gesture(&r, op, label);
-                        }
-                        if ui.add_enabled(i > 0, egui::Button::new("down")).clicked() {
-                            cx.apply(Operation::move_layer(&mesh_name, i, i - 1));
-                        }
-                        if ui
-                            .add_enabled(i + 1 < count, egui::Button::new("up"))
-                            .clicked()
-                        {
-                            cx.apply(Operation::move_layer(&mesh_name, i, i + 1));
-                        }
-                        if ui
-                            .button("remove")
-                            .on_hover_text("Remove the layer")
-                            .clicked()
-                            && let Ok(op) = Operation::remove_layer(doc, &mesh_name, i)
-                        {
-                            cx.apply(op);
-                            if cx.selection.layer == Some((mesh_name.clone(), i)) {
-                                cx.selection.layer = None;
-                            }
-                        }
+                    let frame = egui::Frame::default().inner_margin(1.0);
+                    let (_, dropped) = ui.dnd_drop_zone::<DraggedLayer, ()>(frame, |ui| {
+                        ui.horizontal(|ui| {
+                            self.row(ui, cx, &mesh_name, i, layer, count);
+                        });
                     });
+                    if let Some(d) = dropped
+                        && d.0 == mesh_name
+                        && d.1 != i
+                    {
+                        moved = Some((d.1, i));
+                    }
                 }
             });
-        // Add a layer for any tool node.
+        if let Some((from, to)) = moved {
+            cx.apply(Operation::move_layer(&mesh_name, from, to));
+            if let Some((_, k)) = &mut cx.selection.layer
+                && *k == from
+            {
+                *k = to;
+            }
+        }
+        self.add_layer_row(ui, cx, &mesh_name, count);
+    }
+
+    fn row(
+        &mut self,
+        ui: &mut egui::Ui,
+        cx: &mut PanelContext<'_>,
+        mesh_name: &str,
+        i: usize,
+        layer: &LayerSpec,
+        count: usize,
+    ) {
+        let doc = cx.doc.document();
+        ui.dnd_drag_source(
+            egui::Id::new(("layer-drag", mesh_name, i)),
+            DraggedLayer(mesh_name.to_owned(), i),
+            |ui| {
+                ui.label("⠿").on_hover_text("Drag onto another layer to move it there");
+            },
+        );
+        let mut enabled = layer.enabled;
+        if ui
+            .checkbox(&mut enabled, "")
+            .on_hover_text("Enabled")
+            .changed()
+            && let Ok(op) = Operation::set_layer_enabled(doc, mesh_name, i, enabled)
+        {
+            cx.apply(op);
+        }
+        let solo_text = egui::RichText::new("S").strong();
+        if ui
+            .selectable_label(layer.solo, solo_text)
+            .on_hover_text("Solo: when a layer is soloed, only soloed layers evaluate")
+            .clicked()
+            && let Ok(op) = Operation::set_layer_solo(doc, mesh_name, i, !layer.solo)
+        {
+            cx.apply(op);
+        }
+        let selected = cx.selection.layer == Some((mesh_name.to_owned(), i));
+        let label = ui
+            .selectable_label(selected, &layer.tool)
+            .on_hover_text(influence_summary(layer.influence.as_ref()));
+        if label.clicked() {
+            cx.selection.layer = Some((mesh_name.to_owned(), i));
+            cx.selection.select(Some(layer.tool.clone()));
+        }
+        let mut weight = layer.weight;
+        let r = ui.add(
+            egui::DragValue::new(&mut weight)
+                .range(0.0..=1.0)
+                .speed(0.005)
+                .prefix("w "),
+        );
+        if r.changed()
+            && let Ok(op) = Operation::set_layer_weight(doc, mesh_name, i, weight)
+        {
+            let label = format!("weight of layer {i} of '{mesh_name}'");
+            cx.apply_in_gesture(&r, op, label);
+        }
+        if ui
+            .small_button("⎘")
+            .on_hover_text("Duplicate the layer and its tool")
+            .clicked()
+            && let Ok((op, copy)) = Operation::duplicate_layer(doc, mesh_name, i)
+        {
+            cx.apply(op);
+            cx.selection.layer = Some((mesh_name.to_owned(), i + 1));
+            cx.selection.select(Some(copy));
+        }
+        if ui
+            .add_enabled(i > 0, egui::Button::new("▼").small())
+            .on_hover_text("Move down")
+            .clicked()
+        {
+            cx.apply(Operation::move_layer(mesh_name, i, i - 1));
+        }
+        if ui
+            .add_enabled(i + 1 < count, egui::Button::new("▲").small())
+            .on_hover_text("Move up")
+            .clicked()
+        {
+            cx.apply(Operation::move_layer(mesh_name, i, i + 1));
+        }
+        if ui
+            .small_button("✕")
+            .on_hover_text("Remove the layer (the tool node stays)")
+            .clicked()
+            && let Ok(op) = Operation::remove_layer(doc, mesh_name, i)
+        {
+            cx.apply(op);
+            if cx.selection.layer == Some((mesh_name.to_owned(), i)) {
+                cx.selection.layer = None;
+            }
+        }
+    }
+
+    /// Adds a layer for any tool node.
+    fn add_layer_row(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>, mesh_name: &str, count: usize) {
+        let doc = cx.doc.document();
+        let Ok(mesh) = doc.mesh(mesh_name) else {
+            return;
+        };
         let tools: Vec<&str> = doc
             .nodes
             .iter()
             .filter(|n| n.kind.is_tool())
             .map(|n| n.name.as_str())
             .collect();
-        if !tools.is_empty() {
-            ui.horizontal(|ui| {
-                if !tools.contains(&self.add_tool.as_str()) {
-                    self.add_tool = tools[0].to_owned();
-                }
-                egui::ComboBox::from_id_salt("add-layer-tool")
-                    .selected_text(self.add_tool.clone())
-                    .show_ui(ui, |ui| {
-                        for t in &tools {
-                            ui.selectable_value(&mut self.add_tool, (*t).to_owned(), *t);
-                        }
-                    });
-                if ui.button("Add layer").clicked() {
-                    let mut spec = LayerSpec::new(self.add_tool.clone());
-                    // A macro works in its own area (the paper's area of influence).
-                    if let Ok(NodeKind::Macro(m)) = doc.node(&self.add_tool).map(|n| &n.kind)
-                        && let Some(def) = doc.macros.get(&m.name)
-                        && let Some(area) = &def.area
-                        && mesh.areas.contains_key(area)
-                    {
-                        spec.influence = Some(ductile_scene::document::InfluenceSpec {
-                            area: Some(area.clone()),
-                            ..Default::default()
-                        });
-                    }
-                    cx.apply(Operation::add_layer(&mesh_name, count, spec));
-                }
-            });
+        if tools.is_empty() {
+            return;
         }
+        ui.horizontal(|ui| {
+            if !tools.contains(&self.add_tool.as_str()) {
+                self.add_tool = tools[0].to_owned();
+            }
+            egui::ComboBox::from_id_salt("add-layer-tool")
+                .selected_text(self.add_tool.clone())
+                .show_ui(ui, |ui| {
+                    for t in &tools {
+                        ui.selectable_value(&mut self.add_tool, (*t).to_owned(), *t);
+                    }
+                });
+            if ui.button("Add layer").clicked() {
+                let mut spec = LayerSpec::new(self.add_tool.clone());
+                // A macro works in its own area (the paper's area of influence).
+                if let Ok(NodeKind::Macro(m)) = doc.node(&self.add_tool).map(|n| &n.kind)
+                    && let Some(def) = doc.macros.get(&m.name)
+                    && let Some(area) = &def.area
+                    && mesh.areas.contains_key(area)
+                {
+                    spec.influence = Some(InfluenceSpec {
+                        area: Some(area.clone()),
+                        ..Default::default()
+                    });
+                }
+                cx.apply(Operation::add_layer(mesh_name, count, spec));
+            }
+        });
     }
 }

@@ -1,0 +1,368 @@
+//! Headless tests of the panels with egui_kittest: each panel is drawn in a harness without a
+//! window, driven by clicks and typing, and the operations it emits are checked — and, applied
+//! to the document, what they do.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // Tests may unwrap (house rules).
+
+use bevy_egui::egui;
+use ductile_bevy::prelude::*;
+use ductile_core::ffsd::{ControlPoint, FfsdTool};
+use ductile_core::influence::Shape;
+use ductile_core::tool::Tool;
+use ductile_history::operation::Operation;
+use ductile_scene::create::{LatticeKind, NewTool, Placement};
+use ductile_scene::document::{Document, LayerSpec, MeshNode, Node, NodeKind, VolumeNode};
+use ductile_scene::transform::Transform;
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use bevy::math::Vec3;
+
+use super::add_menu::{AddRequest, add_menu_contents};
+use super::history::HistoryPanel;
+use super::inspector::Inspector;
+use super::outliner::Outliner;
+use super::stack::StackPanel;
+use super::{Gestures, PanelContext, PanelRequest};
+
+/// A mesh "m" with an FFSD tool "p" on its stack and a sphere volume "v".
+fn document() -> Document {
+    let node = |name: &str, parent: Option<&str>, kind| Node {
+        name: name.into(),
+        parent: parent.map(str::to_owned),
+        transform: Transform::IDENTITY,
+        kind,
+    };
+    Document {
+        nodes: vec![
+            node(
+                "m",
+                None,
+                NodeKind::Mesh(MeshNode {
+                    source: "m.obj".into(),
+                    stack: vec![LayerSpec::new("p")],
+                    areas: Default::default(),
+                }),
+            ),
+            node(
+                "p",
+                Some("m"),
+                NodeKind::Tool(Tool::Ffsd(FfsdTool::new(vec![ControlPoint::basic(
+                    Vec3::ZERO,
+                    0.5,
+                    2.0,
+                    0.1,
+                )]))),
+            ),
+            node(
+                "v",
+                Some("m"),
+                NodeKind::Volume(VolumeNode {
+                    shape: Shape::Sphere { radius: 1.0 },
+                }),
+            ),
+        ],
+        ..Document::default()
+    }
+}
+
+/// What a panel test keeps between frames: the document (with its history), the selection,
+/// gestures, and everything the panel emitted.
+struct State<P> {
+    doc: SceneDocument,
+    selection: Selection,
+    gestures: Gestures,
+    panel: P,
+    commands: Vec<DocumentCommand>,
+    requests: Vec<PanelRequest>,
+}
+
+impl<P> State<P> {
+    fn new(panel: P) -> Self {
+        Self {
+            doc: SceneDocument::new(document()),
+            selection: Selection::default(),
+            gestures: Gestures::default(),
+            panel,
+            commands: Vec::new(),
+            requests: Vec::new(),
+        }
+    }
+
+    /// The operations emitted (each an undo step).
+    fn ops(&self) -> Vec<Operation> {
+        self.commands
+            .iter()
+            .filter_map(|c| match c {
+                DocumentCommand::Apply { op, .. } => Some((**op).clone()),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// Applies the emitted commands to the document, as the Studio does after its UI pass.
+    fn apply_commands(&mut self) {
+        for c in std::mem::take(&mut self.commands) {
+            match c {
+                DocumentCommand::Apply { op, label, gesture } => {
+                    self.doc.apply(*op, label, gesture).unwrap();
+                }
+                DocumentCommand::Undo => {
+                    self.doc.undo().unwrap();
+                }
+                DocumentCommand::Redo => {
+                    self.doc.redo().unwrap();
+                }
+                DocumentCommand::Jump(n) => self.doc.jump(n).unwrap(),
+            }
+        }
+    }
+}
+
+/// A harness drawing `show` with a panel context built from the state each frame.
+fn harness<'a, P: 'a>(
+    state: State<P>,
+    mut show: impl FnMut(&mut P, &mut egui::Ui, &mut PanelContext<'_>) + 'a,
+) -> Harness<'a, State<P>> {
+    Harness::builder()
+        .with_size(egui::vec2(900.0, 900.0))
+        .build_ui_state(
+            move |ui, s: &mut State<P>| {
+                let mut cx = PanelContext {
+                    doc: &s.doc,
+                    selection: &mut s.selection,
+                    commands: Vec::new(),
+                    requests: Vec::new(),
+                    gestures: &mut s.gestures,
+                    now: 0.0,
+                };
+                show(&mut s.panel, ui, &mut cx);
+                let (commands, requests) = (cx.commands, cx.requests);
+                s.commands.extend(commands);
+                s.requests.extend(requests);
+            },
+            state,
+        )
+}
+
+#[test]
+fn add_lattice_on_the_selected_mesh_is_one_group_adding_a_node_and_a_layer() {
+    let mut h = Harness::new_ui_state(
+        |ui, picked: &mut Option<AddRequest>| {
+            if let Some(r) = add_menu_contents(ui, true) {
+                *picked = Some(r);
+            }
+        },
+        None,
+    );
+    h.get_by_label("Lattice (Bernstein)").click();
+    h.run();
+    let request = h.state().expect("an entry was picked");
+    assert_eq!(request, AddRequest::Tool(NewTool::Lattice(LatticeKind::Bernstein)));
+    // What the Studio makes of it, around a unit cube.
+    let mut doc = SceneDocument::new(document());
+    let place = Placement::around(&[Vec3::splat(-1.0), Vec3::ONE]).unwrap();
+    let added = crate::authoring::add_operation(doc.document(), &Selection::default(), "m", request, &place)
+        .unwrap()
+        .unwrap();
+    let Operation::Group { ops, .. } = &added.op else {
+        panic!("one group: {:?}", added.op)
+    };
+    assert!(matches!(ops[..], [Operation::AddNode { .. }, Operation::AddLayer { .. }]));
+    doc.apply(added.op, "", None).unwrap();
+    assert_eq!(doc.history().len(), 1, "one undo step");
+    assert_eq!(added.name, "lattice");
+    assert_eq!(added.layer, Some(("m".to_owned(), 1)));
+    assert_eq!(doc.document().mesh("m").unwrap().stack[1].tool, "lattice");
+}
+
+#[test]
+fn a_new_volume_masks_the_selected_layer() {
+    let mut selection = Selection::default();
+    selection.layer = Some(("m".to_owned(), 0));
+    let doc = document();
+    let place = Placement::around(&[Vec3::splat(-1.0), Vec3::ONE]).unwrap();
+    let added = crate::authoring::add_operation(
+        &doc,
+        &selection,
+        "m",
+        AddRequest::Volume(ductile_scene::create::NewVolume::Sphere),
+        &place,
+    )
+    .unwrap()
+    .unwrap();
+    let mut d = doc.clone();
+    added.op.apply(&mut d).unwrap();
+    let inf = d.mesh("m").unwrap().stack[0].influence.clone().unwrap();
+    assert_eq!(inf.volumes, vec![added.name]);
+}
+
+#[test]
+fn the_stack_panel_solos_and_duplicates_layers() {
+    let mut h = harness(State::new(StackPanel::default()), |p, ui, cx| p.show(ui, cx));
+    h.run();
+    h.get_by_label("S").click();
+    h.run();
+    let ops = h.state().ops();
+    assert!(
+        matches!(ops[..], [Operation::SetLayerSolo { index: 0, new: true, .. }]),
+        "{ops:?}"
+    );
+    h.state_mut().apply_commands();
+    h.get_by_label("⎘").click();
+    h.run();
+    let ops = h.state().ops();
+    let Some(Operation::Group { ops: members, .. }) = ops.last() else {
+        panic!("{ops:?}")
+    };
+    assert_eq!(members.len(), 2, "the copied node and its layer");
+    h.state_mut().apply_commands();
+    let stack = &h.state().doc.document().mesh("m").unwrap().stack;
+    assert_eq!(stack.len(), 2);
+    assert_eq!(stack[1].tool, "p-copy");
+    assert!(stack[1].solo, "the copy keeps the layer's flags");
+}
+
+#[test]
+fn the_outliner_adds_groups_renames_and_deletes() {
+    let mut h = harness(State::new(Outliner::default()), |p, ui, cx| p.show(ui, cx));
+    h.run();
+    h.get_by_label("+ group").click();
+    h.run();
+    assert!(matches!(h.state().ops()[..], [Operation::Group { .. }]));
+    h.state_mut().apply_commands();
+    assert!(h.state().doc.document().node("group").is_ok());
+    // Double-click renames in place; Enter applies.
+    h.get_by_label("◯ v").click();
+    h.run();
+    h.state_mut().selection.select(Some("v".to_owned()));
+    h.key_press(egui::Key::F2);
+    h.run();
+    h.get_all_by_value("v").next().unwrap().type_text("-ball");
+    h.key_press(egui::Key::Enter);
+    h.run();
+    assert!(
+        h.state().ops().iter().any(|o| matches!(o, Operation::Rename { new, .. } if new == "v-ball")),
+        "{:?}",
+        h.state().ops()
+    );
+    h.state_mut().apply_commands();
+    assert!(h.state().doc.document().node("v-ball").is_ok());
+    // ✕ deletes the tool with its layer, in one step.
+    let before = h.state().doc.history().len();
+    h.get_all_by_label("✕").nth(1).unwrap().click();
+    h.run();
+    h.state_mut().apply_commands();
+    assert_eq!(h.state().doc.history().len(), before + 1);
+    assert!(h.state().doc.document().problems().is_empty());
+}
+
+#[test]
+fn the_inspector_edits_a_tool_and_refuses_an_out_of_range_value() {
+    let mut state = State::new(Inspector::default());
+    state.selection.select(Some("p".to_owned()));
+    let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
+    h.run();
+    // Structure: a second control point.
+    h.get_by_label("+ point").click();
+    h.run();
+    let ops = h.state().ops();
+    let Some(Operation::SetTool { new: Tool::Ffsd(f), .. }) = ops.last() else {
+        panic!("{ops:?}")
+    };
+    assert_eq!(f.points.len(), 2);
+    h.state_mut().commands.clear();
+    // ε = −1 is refused at the widget, with the reason, and nothing is applied.
+    let is_epsilon = |n: &egui_kittest::kittest::AccessKitNode<'_>| {
+        n.role() == egui::accesskit::Role::SpinButton
+            && n.numeric_value().is_some_and(|v| (v - 0.1).abs() < 1e-6)
+    };
+    // Drag the ε field 300 points to the left: at 0.001 per point it would reach −0.2.
+    let at = h.get(egui_kittest::kittest::By::new().predicate(is_epsilon)).rect().center();
+    h.hover_at(at);
+    h.run();
+    h.drag_at(at);
+    h.run();
+    for k in 1..=30 {
+        h.hover_at(at - egui::vec2(10.0 * k as f32, 0.0));
+        h.run();
+    }
+    h.drop_at(at - egui::vec2(300.0, 0.0));
+    h.run();
+    // Only the edits that kept ε > 0 were applied; the rest was refused with the reason.
+    let last_epsilon = h.state().ops().iter().rev().find_map(|o| match o {
+        Operation::SetTool { new: Tool::Ffsd(f), .. } => Some(f.points[0].epsilon),
+        _ => None,
+    });
+    assert!(last_epsilon.is_none_or(|e| e > 0.0), "{last_epsilon:?}");
+    h.get_by_label_contains("refused:");
+    h.get_by_label_contains("must be > 0");
+    h.state_mut().commands.clear();
+    assert!(h.state().ops().is_empty(), "{:?}", h.state().ops());
+}
+
+#[test]
+fn the_history_panel_steps_and_jumps() {
+    let mut state = State::new(HistoryPanel::default());
+    for w in [0.2_f32, 0.4] {
+        let op = Operation::set_layer_weight(state.doc.document(), "m", 0, w).unwrap();
+        state.doc.apply(op, format!("weight {w}"), None).unwrap();
+    }
+    state.doc.jump(0).unwrap();
+    let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
+    h.run();
+    h.get_by_label("▶|").click();
+    h.run();
+    assert!(matches!(h.state().commands[..], [DocumentCommand::Jump(1)]));
+    h.state_mut().apply_commands();
+    h.get_by_label("weight 0.4").click();
+    h.run();
+    assert!(matches!(h.state().commands[..], [DocumentCommand::Jump(2)]));
+}
+
+#[test]
+fn the_influence_editor_masks_a_layer_with_a_volume() {
+    let mut state = State::new(Inspector::default());
+    state.selection.layer = Some(("m".to_owned(), 0));
+    let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
+    h.run();
+    h.get_by_label("influence (else every vertex, weight 1)").click();
+    h.run();
+    h.state_mut().apply_commands();
+    h.run();
+    h.get_by_label("v").click();
+    h.run();
+    let ops = h.state().ops();
+    let Some(Operation::SetLayerInfluence { new: Some(inf), .. }) = ops.last() else {
+        panic!("{ops:?}")
+    };
+    assert_eq!(inf.volumes, vec!["v".to_owned()]);
+}
+
+#[test]
+fn a_sketch_tool_asks_for_its_strokes_to_be_redrawn() {
+    let mut state = State::new(Inspector::default());
+    let tool = ductile_scene::sketching::twist_tool(
+        ductile_core::sketch::tool::Stroke {
+            pixels: vec![bevy::math::Vec2::ZERO, bevy::math::Vec2::ONE * 50.0],
+            camera: ductile_core::sketch::camera::Camera {
+                eye: Vec3::Z * 5.0,
+                target: Vec3::ZERO,
+                up: Vec3::Y,
+                projection: ductile_core::sketch::camera::Projection::Perspective { fov_y: 0.6 },
+                near: 0.1,
+                far: 100.0,
+                viewport: bevy::math::Vec2::new(400.0, 300.0),
+            },
+        },
+        1.0,
+        None,
+    );
+    let op = Operation::set_tool(state.doc.document(), "p", tool).unwrap();
+    state.doc.apply(op, "", None).unwrap();
+    state.selection.select(Some("p".to_owned()));
+    let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
+    h.run();
+    h.get_by_label("Redraw strokes…").click();
+    h.run();
+    assert_eq!(h.state().requests, vec![PanelRequest::RedrawSketch("p".to_owned())]);
+}
