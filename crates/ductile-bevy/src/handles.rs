@@ -126,6 +126,7 @@ pub fn sync_handles(
     doc: Res<SceneDocument>,
     selection: Res<Selection>,
     drag: Res<DragState>,
+    gizmos: Res<crate::gizmos::GizmoSettings>,
     assets: Option<Res<HandleAssets>>,
     mut existing: Query<(
         Entity,
@@ -134,14 +135,18 @@ pub fn sync_handles(
         Option<&mut MeshMaterial3d<StandardMaterial>>,
     )>,
 ) {
-    if !(doc.is_changed() || selection.is_changed() || drag.is_changed()) {
+    if !(doc.is_changed() || selection.is_changed() || drag.is_changed() || gizmos.is_changed()) {
         return;
     }
-    let mut wanted: HashMap<(String, HandleId), (Vec3, bool)> =
+    // With the overlays off (no gizmos), there are no handles either.
+    let mut wanted: HashMap<(String, HandleId), (Vec3, bool)> = if gizmos.enabled {
         wanted_handles(doc.document(), &selection)
             .into_iter()
             .map(|(n, id, p, s)| ((n, id), (p, s)))
-            .collect();
+            .collect()
+    } else {
+        HashMap::new()
+    };
     let material_for = |node: &str, id: &HandleId, selected: bool| {
         assets.as_ref().map(|a| {
             let active = drag
@@ -283,10 +288,8 @@ pub fn select_on_press(
                     selection.handles.insert(h.id);
                 }
             }
-            (_, Ok(n)) => {
-                if !selection.is_selected(&n.name) {
-                    selection.select(Some(n.name.clone()));
-                }
+            (_, Ok(n)) if !selection.is_selected(&n.name) => {
+                selection.select(Some(n.name.clone()));
             }
             _ => {}
         }

@@ -67,17 +67,21 @@ fn mapped(mut doc: Document, source: &str) -> Document {
         if let Area::Region(shapes) = area {
             for s in shapes {
                 s.transform.translation = to_makehuman(s.transform.translation);
-                s.shape = match s.shape {
-                    Shape::Sphere { radius } => Shape::Sphere { radius: radius * S },
-                    Shape::Box { half_extents } => Shape::Box {
+                s.shape = match &s.shape {
+                    &Shape::Sphere { radius } => Shape::Sphere { radius: radius * S },
+                    &Shape::Box { half_extents } => Shape::Box {
                         half_extents: half_extents * S,
                     },
-                    Shape::Capsule {
+                    &Shape::Capsule {
                         radius,
                         half_height,
                     } => Shape::Capsule {
                         radius: radius * S,
                         half_height: half_height * S,
+                    },
+                    Shape::Tube { points, radii } => Shape::Tube {
+                        points: points.iter().map(|&p| p * S).collect(),
+                        radii: radii.iter().map(|r| r * S).collect(),
                     },
                 };
             }

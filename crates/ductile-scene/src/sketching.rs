@@ -89,7 +89,11 @@ pub fn preview(
 ) -> Result<Preview> {
     let curve = reference_curve(kind, stroke, positions, topology)?;
     let partition = partition_from_curve(positions, topology, &curve)?;
-    let s = skin(&Polyline::new(&curve, "reference curve")?, positions, &partition.roi);
+    let s = skin(
+        &Polyline::new(&curve, "reference curve")?,
+        positions,
+        &partition.roi,
+    );
     Ok(Preview {
         curve,
         partition,
@@ -140,9 +144,12 @@ pub fn stroke_length(pixels: &[Vec2]) -> f32 {
 /// curve). Radians.
 #[must_use]
 pub fn twist_angle(reference: &[Vec2], twist: &[Vec2]) -> f32 {
-    let (Some(&r0), Some(&r1), Some(&t0), Some(&t1)) =
-        (reference.first(), reference.last(), twist.first(), twist.last())
-    else {
+    let (Some(&r0), Some(&r1), Some(&t0), Some(&t1)) = (
+        reference.first(),
+        reference.last(),
+        twist.first(),
+        twist.last(),
+    ) else {
         return 0.0;
     };
     let length = stroke_length(reference);
@@ -228,7 +235,10 @@ mod tests {
         for w in points.windows(2) {
             for k in 0..10 {
                 let t = k as f32 / 10.0;
-                pixels.push(px(w[0].0 + (w[1].0 - w[0].0) * t, w[0].1 + (w[1].1 - w[0].1) * t));
+                pixels.push(px(
+                    w[0].0 + (w[1].0 - w[0].0) * t,
+                    w[0].1 + (w[1].1 - w[0].1) * t,
+                ));
             }
         }
         let last = points[points.len() - 1];
@@ -278,7 +288,11 @@ mod tests {
         }
         .evaluate_welded(&rest)
         .unwrap();
-        assert!(out.iter().zip(rest.welded_positions()).any(|(a, b)| a.distance(*b) > 0.1));
+        assert!(
+            out.iter()
+                .zip(rest.welded_positions())
+                .any(|(a, b)| a.distance(*b) > 0.1)
+        );
         let twist = twist_tool(reference, 1.0, None);
         twist.validate("twist").unwrap();
     }
@@ -313,7 +327,11 @@ mod tests {
             rest.topology(),
         )
         .unwrap();
-        assert!(after.partition.roi.len() < before, "{} !< {before}", after.partition.roi.len());
+        assert!(
+            after.partition.roi.len() < before,
+            "{} !< {before}",
+            after.partition.roi.len()
+        );
         assert!(after.partition.rigid.len() >= p.partition.rigid.len());
     }
 }

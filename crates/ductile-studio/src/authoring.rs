@@ -136,7 +136,9 @@ pub fn add_nodes(
             continue;
         }
         let Some(mesh) = mesh_in_focus(document, &selection) else {
-            notices.0.push("Add: the scene has no mesh (File ▸ Import mesh…)".to_owned());
+            notices
+                .0
+                .push("Add: the scene has no mesh (File ▸ Import mesh…)".to_owned());
             continue;
         };
         match request.request {
@@ -151,7 +153,9 @@ pub fn add_nodes(
             _ => {}
         }
         let Some((entity, _, ev, at)) = meshes.iter().find(|(_, n, _, _)| n.name == mesh) else {
-            notices.0.push(format!("Add: mesh '{mesh}' is not loaded yet"));
+            notices
+                .0
+                .push(format!("Add: mesh '{mesh}' is not loaded yet"));
             continue;
         };
         let positions = current_positions(ev);

@@ -60,6 +60,8 @@ pub struct Session {
 pub struct SketchState {
     /// The sketch in progress.
     pub session: Option<Session>,
+    /// Where Shift+A asked for the Add popup (window position), until the UI opens it.
+    pub add_popup: Option<Vec2>,
     /// Colours were written on this mesh and must be taken off when the sketch ends.
     painted: Option<String>,
 }
@@ -186,7 +188,8 @@ fn paint(meshes: &mut Assets<Mesh>, ev: &MeshEvaluation, preview: Option<&Previe
                 .attribute(Mesh::ATTRIBUTE_POSITION)
                 .map_or(0, VertexAttributeValues::len);
             if topology.weld.len() == count {
-                let colors: Vec<[f32; 4]> = topology.weld.iter().map(|&w| welded[w as usize]).collect();
+                let colors: Vec<[f32; 4]> =
+                    topology.weld.iter().map(|&w| welded[w as usize]).collect();
                 mesh.insert_attribute(Mesh::ATTRIBUTE_COLOR, colors);
             }
         }
@@ -245,12 +248,12 @@ pub fn sketch_input(
         if let Some(c) = cursor {
             session.drawing.push(c);
         }
-    } else if buttons.pressed(MouseButton::Left) && !session.drawing.is_empty() {
-        if let Some(c) = cursor
-            && session.drawing.last().is_none_or(|l| l.distance(c) >= 1.0)
-        {
-            session.drawing.push(c);
-        }
+    } else if buttons.pressed(MouseButton::Left)
+        && !session.drawing.is_empty()
+        && let Some(c) = cursor
+        && session.drawing.last().is_none_or(|l| l.distance(c) >= 1.0)
+    {
+        session.drawing.push(c);
     }
     if !buttons.just_released(MouseButton::Left) || session.drawing.is_empty() {
         return;

@@ -78,7 +78,13 @@ impl Plugin for StudioPlugin {
         .add_systems(
             Update,
             (
-                (shortcuts, run_actions, crate::authoring::add_nodes, crate::sketch::sketch_input)
+                (
+                    viewport_shortcuts,
+                    shortcuts,
+                    run_actions,
+                    crate::authoring::add_nodes,
+                    crate::sketch::sketch_input,
+                )
                     .chain()
                     .before(DuctileSystems::Input),
                 load_rest_meshes
@@ -171,6 +177,37 @@ fn load_rest_meshes(
                 rests.insert_failure(source, text);
             }
         }
+    }
+}
+
+/// Viewport shortcuts (ignored while a text field has the keyboard): Alt+Shift+Z toggles
+/// the overlays (gizmos and handles) and Shift+A over the viewport opens the Add menu at the
+/// cursor, as in Blender.
+fn viewport_shortcuts(
+    keys: Res<ButtonInput<KeyCode>>,
+    keyboard: Res<KeyboardToViewport>,
+    mut sketch: ResMut<crate::sketch::SketchState>,
+    mut view: ResMut<ViewOptions>,
+    over: Res<PointerOverViewport>,
+    windows: Query<&Window, With<bevy::window::PrimaryWindow>>,
+) {
+    if !keyboard.0 {
+        return;
+    }
+    let alt = keys.any_pressed([KeyCode::AltLeft, KeyCode::AltRight])
+        || keys.any_just_released([KeyCode::AltLeft, KeyCode::AltRight]);
+    let shift_held = keys.any_pressed([KeyCode::ShiftLeft, KeyCode::ShiftRight])
+        || keys.any_just_released([KeyCode::ShiftLeft, KeyCode::ShiftRight]);
+    if alt && shift_held && keys.just_pressed(KeyCode::KeyZ) {
+        view.gizmos = !view.gizmos;
+    } else if shift_held
+        && !alt
+        && keys.just_pressed(KeyCode::KeyA)
+        && over.0
+        && !sketch.active()
+        && let Some(at) = windows.single().ok().and_then(Window::cursor_position)
+    {
+        sketch.add_popup = Some(at);
     }
 }
 

@@ -110,9 +110,14 @@ pub fn studio_ui(
 
     let mut menu_action = None;
     let top = egui::Panel::top("menu-bar").show(&mut root, |ui| {
-        menu_action = panels
-            .menu
-            .show(ui, &inputs.doc, has_selection, has_mesh, &mut view, &mut heat);
+        menu_action = panels.menu.show(
+            ui,
+            &inputs.doc,
+            has_selection,
+            has_mesh,
+            &mut view,
+            &mut heat,
+        );
     });
 
     let info = status_info(&inputs, panels.frame_ms);
@@ -139,7 +144,10 @@ pub fn studio_ui(
         .default_size(300.0)
         .show(&mut root, |ui| {
             ui.heading("Inspector");
-            panels.inspector.show(ui, &mut cx);
+            egui::ScrollArea::vertical()
+                .id_salt("inspector")
+                .max_height(ui.available_height() * 0.6)
+                .show(ui, |ui| panels.inspector.show(ui, &mut cx));
             ui.separator();
             ui.heading("Identikit");
             panels.macros.show(ui, &mut cx);
@@ -149,14 +157,10 @@ pub fn studio_ui(
         actions.write(a);
     }
 
-    // The Add popup at the cursor (Shift+A over the viewport, as in Blender).
-    let cursor = ctx.pointer_latest_pos();
-    if !ctx.text_edit_focused()
-        && ctx.input(|i| i.modifiers.shift && i.key_pressed(egui::Key::A))
-        && over.0
-        && let Some(at) = cursor
-    {
-        panels.add_popup.open_at = Some(at);
+    // The Add popup at the cursor (Shift+A over the viewport, as in Blender; the shortcut is
+    // read by the Studio's `shortcuts`, which sees a Shift released in the same frame).
+    if let Some(at) = sketch_popup_request(&mut sketch) {
+        panels.add_popup.open_at = Some(egui::pos2(at.x, at.y));
     }
     let popup_at = panels.add_popup.open_at;
     if let Some(request) = panels.add_popup.show(&ctx, has_mesh) {
@@ -176,8 +180,12 @@ pub fn studio_ui(
                 let doc = inputs.doc.document();
                 let mesh = crate::authoring::mesh_in_focus(doc, cx.selection);
                 let kind = match doc.node(&node).map(|n| &n.kind) {
-                    Ok(ductile_scene::document::NodeKind::Tool(ductile_core::tool::Tool::Sketch(t)))
-                        if matches!(t.mode, ductile_core::sketch::tool::SketchMode::Twist { .. }) =>
+                    Ok(ductile_scene::document::NodeKind::Tool(
+                        ductile_core::tool::Tool::Sketch(t),
+                    )) if matches!(
+                        t.mode,
+                        ductile_core::sketch::tool::SketchMode::Twist { .. }
+                    ) =>
                     {
                         ductile_scene::sketching::SketchKind::Twist
                     }
@@ -275,6 +283,11 @@ pub fn studio_ui(
         keyboard.0 = keys_free;
     }
     Ok(())
+}
+
+/// Takes the position where Shift+A asked for the Add popup, if it did.
+fn sketch_popup_request(sketch: &mut SketchState) -> Option<Vec2> {
+    sketch.add_popup.take()
 }
 
 fn status_info(inputs: &UiInputs, frame_ms: Option<f64>) -> StatusInfo {

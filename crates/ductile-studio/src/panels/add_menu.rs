@@ -98,7 +98,8 @@ impl AddPopup {
             && ctx
                 .pointer_interact_pos()
                 .is_some_and(|p| !area.response.rect.contains(p));
-        if picked.is_some() || clicked_elsewhere || ctx.input(|i| i.key_pressed(egui::Key::Escape)) {
+        if picked.is_some() || clicked_elsewhere || ctx.input(|i| i.key_pressed(egui::Key::Escape))
+        {
             self.open_at = None;
         }
         picked

@@ -25,9 +25,6 @@ impl Default for HistoryPanel {
     }
 }
 
-/// Height of one step row in points.
-const ROW: f32 = 18.0;
-
 impl HistoryPanel {
     /// True while the history plays.
     #[must_use]
@@ -58,14 +55,21 @@ impl HistoryPanel {
             }
             let playing = self.is_playing();
             if ui
-                .add_enabled(playing || cursor < len, egui::Button::new(if playing { "⏸" } else { "▶" }).small())
-                .on_hover_text(if playing { "Pause" } else { "Play the steps from here" })
+                .add_enabled(
+                    playing || cursor < len,
+                    egui::Button::new(if playing { "⏸" } else { "▶" }).small(),
+                )
+                .on_hover_text(if playing {
+                    "Pause"
+                } else {
+                    "Play the steps from here"
+                })
                 .clicked()
             {
                 self.playing_since = if playing { None } else { Some(cx.now) };
             }
             if ui
-                .add_enabled(cursor < len, egui::Button::new("▶|").small())
+                .add_enabled(cursor < len, egui::Button::new("⏭").small())
                 .on_hover_text("One step forward")
                 .clicked()
             {
@@ -90,11 +94,12 @@ impl HistoryPanel {
             ui.ctx().request_repaint();
         }
         let total = len + 1;
+        let row = ui.spacing().interact_size.y;
         egui::ScrollArea::vertical()
             .id_salt("history")
             .auto_shrink([false, true])
-            .max_height(ui.available_height().max(ROW * 4.0))
-            .show_rows(ui, ROW, total, |ui, rows| {
+            .max_height(ui.available_height().max(row * 4.0))
+            .show_rows(ui, row, total, |ui, rows| {
                 for row in rows {
                     let (text, step) = if row == 0 {
                         (egui::RichText::new("(opened)"), 0)

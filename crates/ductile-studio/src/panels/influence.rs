@@ -21,12 +21,22 @@ pub struct InfluenceEditor {
 
 impl InfluenceEditor {
     /// Draws the influence of layer `index` of mesh `mesh`.
-    pub fn show_layer(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>, mesh: &str, index: usize) {
+    pub fn show_layer(
+        &mut self,
+        ui: &mut egui::Ui,
+        cx: &mut PanelContext<'_>,
+        mesh: &str,
+        index: usize,
+    ) {
         let doc = cx.doc.document();
         let Ok(m) = doc.mesh(mesh) else { return };
-        let Some(layer) = m.stack.get(index) else { return };
+        let Some(layer) = m.stack.get(index) else {
+            return;
+        };
         self.refusals.for_node(&format!("{mesh}/{index}"));
-        ui.label(egui::RichText::new(format!("Layer {index} of '{mesh}': '{}'", layer.tool)).strong());
+        ui.label(
+            egui::RichText::new(format!("Layer {index} of '{mesh}': '{}'", layer.tool)).strong(),
+        );
         let old = layer.influence.clone();
         let mut inf = old.clone().unwrap_or_default();
         let mut response = None;
@@ -116,7 +126,12 @@ impl InfluenceEditor {
         if let Falloff::Curve(f) = &mut inf.falloff {
             ui.label("weight F(s) from the boundary (s = 0) to the plateau (s = 1)");
             let mut values = f.values.clone();
-            let r = curve_editor(ui, egui::Id::new(("falloff-curve", mesh, index)), &mut values, f.degree);
+            let r = curve_editor(
+                ui,
+                egui::Id::new(("falloff-curve", mesh, index)),
+                &mut values,
+                f.degree,
+            );
             if r.changed() {
                 f.values = values;
                 response = Some(r);
@@ -134,7 +149,10 @@ impl InfluenceEditor {
             if !(inf.inner.is_finite() && (0.0..1.0).contains(&inf.inner)) {
                 Some(format!("inner = {} must be in [0, 1)", inf.inner))
             } else {
-                inf.falloff.validate("influence").err().map(|e| e.to_string())
+                inf.falloff
+                    .validate("influence")
+                    .err()
+                    .map(|e| e.to_string())
             }
         });
         if let Some(p) = problem {
@@ -144,14 +162,22 @@ impl InfluenceEditor {
         self.refusals.accept("influence");
         if let Ok(op) = Operation::set_layer_influence(doc, mesh, index, new) {
             match response {
-                Some(r) => cx.apply_in_gesture(&r, op, format!("influence of layer {index} of '{mesh}'")),
+                Some(r) => {
+                    cx.apply_in_gesture(&r, op, format!("influence of layer {index} of '{mesh}'"))
+                }
                 None => cx.apply(op),
             }
         }
     }
 
     /// Draws volume node `name`'s shape: its type and every size, a drag being one undo step.
-    pub fn show_volume(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>, name: &str, shape: &Shape) {
+    pub fn show_volume(
+        &mut self,
+        ui: &mut egui::Ui,
+        cx: &mut PanelContext<'_>,
+        name: &str,
+        shape: &Shape,
+    ) {
         self.refusals.for_node(name);
         let doc = cx.doc.document();
         let kinds = ["sphere", "box", "capsule", "tube"];
@@ -194,11 +220,15 @@ impl InfluenceEditor {
             return;
         }
         let channels = shape_channels(shape);
-        if let Some(edit) = parameter_list(ui, &format!("volume-{name}"), &channels, &self.refusals) {
+        if let Some(edit) = parameter_list(ui, &format!("volume-{name}"), &channels, &self.refusals)
+        {
             let mut new = shape.clone();
             let result = set_shape_channel(&mut new, &edit.path, &edit.value)
                 .map_err(|e| e.to_string())
-                .and_then(|()| new.validate(&format!("volume '{name}'")).map_err(|e| e.to_string()));
+                .and_then(|()| {
+                    new.validate(&format!("volume '{name}'"))
+                        .map_err(|e| e.to_string())
+                });
             match result {
                 Err(reason) => self.refusals.refuse(&edit.path, reason),
                 Ok(()) => {
@@ -214,7 +244,11 @@ impl InfluenceEditor {
                 if ui.button("+ point").clicked() && points.len() >= 2 {
                     let n = points.len();
                     let mut s = shape.clone();
-                    if let Shape::Tube { points: p, radii: r } = &mut s {
+                    if let Shape::Tube {
+                        points: p,
+                        radii: r,
+                    } = &mut s
+                    {
                         p.push(points[n - 1] + (points[n - 1] - points[n - 2]));
                         r.push(radii[n - 1]);
                     }
@@ -224,7 +258,11 @@ impl InfluenceEditor {
                 }
                 if points.len() > 2 && ui.button("− last").clicked() {
                     let mut s = shape.clone();
-                    if let Shape::Tube { points: p, radii: r } = &mut s {
+                    if let Shape::Tube {
+                        points: p,
+                        radii: r,
+                    } = &mut s
+                    {
                         p.pop();
                         r.pop();
                     }

@@ -30,7 +30,7 @@ impl Inspector {
             ui.separator();
         }
         let Some(name) = cx.selection.node.clone() else {
-            ui.weak("Select a node in the outliner, a handle in the viewport or a macro slider; Add (Shift+A) makes new tools and volumes.");
+            ui.weak("Select a node in the outliner, a handle in the viewport or a macro slider.");
             return;
         };
         let Ok(node) = doc.node(&name) else {

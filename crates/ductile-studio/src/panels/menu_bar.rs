@@ -145,7 +145,7 @@ impl MenuBar {
             ui.menu_button("View", |ui| {
                 ui.checkbox(&mut view.grid, "Grid");
                 ui.checkbox(&mut view.wireframe, "Wireframe");
-                ui.checkbox(&mut view.gizmos, "Gizmos");
+                ui.checkbox(&mut view.gizmos, "Gizmos and handles (Alt+Shift+Z)");
                 ui.separator();
                 ui.label("Heat-map of the selected layer");
                 ui.radio_value(&mut heat.mode, None, "Off (shaded)");

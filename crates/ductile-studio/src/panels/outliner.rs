@@ -1,6 +1,6 @@
 //! The outliner: every node as a tree by parent, with an icon per kind. Click selects;
 //! double-click or F2 renames in place (Enter applies, Escape cancels); the eye hides a node
-//! in the viewport; ✕ deletes it with everything that refers to it; dragging a node onto
+//! in the viewport; 🗑 deletes it with everything that refers to it; dragging a node onto
 //! another makes it its child (onto "scene" makes it a root); a filter keeps the nodes whose
 //! name contains the text (and their ancestors).
 
@@ -22,22 +22,24 @@ pub struct Outliner {
 #[derive(Debug, Clone, PartialEq)]
 struct DraggedNode(String);
 
-/// The icon of a node kind.
+/// The icon of a node kind (glyphs of egui's default proportional fonts only).
 #[must_use]
 pub fn icon(kind: &NodeKind) -> &'static str {
     match kind {
         NodeKind::Mesh(_) => "▣",
         NodeKind::Tool(t) => match t {
             ductile_core::tool::Tool::Ffsd(_) => "✚",
-            ductile_core::tool::Tool::Sketch(_) => "✎",
-            ductile_core::tool::Tool::Axial(_) | ductile_core::tool::Tool::Curve(_) => "〰",
-            ductile_core::tool::Tool::Lattice(_) | ductile_core::tool::Tool::DirectFfd(_) => "▦",
-            ductile_core::tool::Tool::Dogme(_) => "⊙",
-            ductile_core::tool::Tool::ShapeSurface(_) => "▱",
+            ductile_core::tool::Tool::Sketch(_) => "✏",
+            ductile_core::tool::Tool::Axial(_) => "➰",
+            ductile_core::tool::Tool::Curve(_) => "〰",
+            ductile_core::tool::Tool::Lattice(_) => "⊞",
+            ductile_core::tool::Tool::DirectFfd(_) => "⛶",
+            ductile_core::tool::Tool::Dogme(_) => "🔘",
+            ductile_core::tool::Tool::ShapeSurface(_) => "◼",
         },
-        NodeKind::Macro(_) => "◆",
-        NodeKind::Volume(_) => "◯",
-        NodeKind::Group => "▤",
+        NodeKind::Macro(_) => "♦",
+        NodeKind::Volume(_) => "⚪",
+        NodeKind::Group => "🗀",
     }
 }
 
@@ -129,8 +131,12 @@ impl Outliner {
                 ui.add_space(depth as f32 * 12.0);
                 let hidden = cx.selection.is_hidden(name);
                 if ui
-                    .small_button(if hidden { "◌" } else { "👁" })
-                    .on_hover_text(if hidden { "Show in the viewport" } else { "Hide in the viewport" })
+                    .selectable_label(!hidden, "👁")
+                    .on_hover_text(if hidden {
+                        "Show in the viewport"
+                    } else {
+                        "Hide in the viewport"
+                    })
                     .clicked()
                 {
                     if hidden {
@@ -184,7 +190,7 @@ impl Outliner {
                     ui.weak(format!("+{macros} macros"));
                 }
                 if ui
-                    .small_button("✕")
+                    .small_button("🗑")
                     .on_hover_text("Delete (with its children, layers and references)")
                     .clicked()
                     && let Ok(op) = Operation::remove_node_and_references(doc, name)

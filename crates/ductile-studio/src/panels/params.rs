@@ -28,23 +28,55 @@ pub fn meta(path: &str) -> Meta {
     let leaf = path.rsplit('.').next().unwrap_or(path);
     let m = |unit, angle, hint| Meta { unit, angle, hint };
     match leaf {
-        "gamma" => m("", false, "strength γ: the displacement at the closest vertex is γ·|V − C|; the sign sets the direction"),
-        "alpha" => m("", false, "sharpness α (> 0): the exponent of the distance in the weight"),
-        "epsilon" => m("units", false, "size ε (> 0, mesh units): the width of the weight"),
+        "gamma" => m(
+            "",
+            false,
+            "strength γ: the displacement at the closest vertex is γ·|V − C|; the sign sets the direction",
+        ),
+        "alpha" => m(
+            "",
+            false,
+            "sharpness α (> 0): the exponent of the distance in the weight",
+        ),
+        "epsilon" => m(
+            "units",
+            false,
+            "size ε (> 0, mesh units): the width of the weight",
+        ),
         "gain" => m("", false, "gain: multiplies every point's γ"),
-        "theta" | "below" | "above" => m("", false, "height limit ϑ in (0, 1]: the share of the largest displacement kept"),
+        "theta" | "below" | "above" => m(
+            "",
+            false,
+            "height limit ϑ in (0, 1]: the share of the largest displacement kept",
+        ),
         "radius" | "half_height" => m("units", false, "size in mesh units (> 0)"),
         "half_extents" => m("units", false, "half sizes in mesh units (each > 0)"),
         "inner" => m("", false, "normalised distance of full weight, in [0, 1)"),
-        "falloff" => m("units", false, "distance over which the deformation fades outside the lattice (≥ 0; 0: none)"),
+        "falloff" => m(
+            "units",
+            false,
+            "distance over which the deformation fades outside the lattice (≥ 0; 0: none)",
+        ),
         "weight" => m("", false, "rational weight of the control point (> 0)"),
         "angle" => m("°", true, "angle"),
-        "stretch" => m("", false, "refinement: split edges stretched more than this ratio (> 0)"),
+        "stretch" => m(
+            "",
+            false,
+            "refinement: split edges stretched more than this ratio (> 0)",
+        ),
         "twist" => m("°", true, "twist about the axis"),
         "rotation" => m("°", true, "rotation"),
         "displacement" => m("units", false, "displacement in mesh units"),
-        "offset" => m("units", false, "offset of the control point from its rest place"),
-        "height" => m("", false, "height of the point above the surface (times u3)"),
+        "offset" => m(
+            "units",
+            false,
+            "offset of the control point from its rest place",
+        ),
+        "height" => m(
+            "",
+            false,
+            "height of the point above the surface (times u3)",
+        ),
         "values" => m("", false, "control values of F(s) over s ∈ [0, 1]"),
         "radii" => m("units", false, "radius at each point of the tube (> 0)"),
         _ => m("units", false, "position in mesh units"),
@@ -90,7 +122,12 @@ fn vector(ui: &mut egui::Ui, v: &mut Vec3) -> Option<egui::Response> {
     let mut changed = None;
     let s = speed(v.abs().max_element());
     for (c, axis) in [(&mut v.x, "x "), (&mut v.y, "y "), (&mut v.z, "z ")] {
-        let r = ui.add(egui::DragValue::new(c).speed(s).prefix(axis).max_decimals(5));
+        let r = ui.add(
+            egui::DragValue::new(c)
+                .speed(s)
+                .prefix(axis)
+                .max_decimals(5),
+        );
         if r.changed() {
             changed = Some(r);
         }
@@ -110,7 +147,7 @@ pub fn value_widget(
         Value::Scalar(x) => {
             let mut x = *x;
             let r = scalar(ui, &mut x, meta);
-            r.changed().then(|| (Value::Scalar(x), r))
+            r.changed().then_some((Value::Scalar(x), r))
         }
         Value::Vector(v) => {
             let mut v = *v;
@@ -124,7 +161,12 @@ pub fn value_widget(
             ui.horizontal(|ui| {
                 for (a, axis) in [(&mut x, "x "), (&mut y, "y "), (&mut z, "z ")] {
                     let mut deg = a.to_degrees() + 0.0;
-                    let r = ui.add(egui::DragValue::new(&mut deg).speed(0.5).prefix(axis).suffix("°"));
+                    let r = ui.add(
+                        egui::DragValue::new(&mut deg)
+                            .speed(0.5)
+                            .prefix(axis)
+                            .suffix("°"),
+                    );
                     if r.changed() {
                         *a = deg.to_radians();
                         changed = Some(r);
@@ -279,26 +321,29 @@ pub fn parameter_list(
     let many = groups.len() > 6;
     for (g, items) in groups {
         let rows = |ui: &mut egui::Ui| {
-            egui::Grid::new((id, g)).num_columns(2).striped(true).show(ui, |ui| {
-                for (path, value) in items {
-                    let m = meta(path);
-                    ui.label(leaf(path)).on_hover_text(m.hint);
-                    ui.vertical(|ui| {
-                        let wid = egui::Id::new((id, path));
-                        if let Some((value, response)) = value_widget(ui, wid, value, m) {
-                            edit = Some(ParamEdit {
-                                path: path.clone(),
-                                value,
-                                response,
-                            });
-                        }
-                        if let Some(reason) = refusals.reason(path) {
-                            ui.colored_label(REFUSED, format!("refused: {reason}"));
-                        }
-                    });
-                    ui.end_row();
-                }
-            });
+            egui::Grid::new((id, g))
+                .num_columns(2)
+                .striped(true)
+                .show(ui, |ui| {
+                    for (path, value) in items {
+                        let m = meta(path);
+                        ui.label(leaf(path)).on_hover_text(m.hint);
+                        ui.vertical(|ui| {
+                            let wid = egui::Id::new((id, path));
+                            if let Some((value, response)) = value_widget(ui, wid, value, m) {
+                                edit = Some(ParamEdit {
+                                    path: path.clone(),
+                                    value,
+                                    response,
+                                });
+                            }
+                            if let Some(reason) = refusals.reason(path) {
+                                ui.colored_label(REFUSED, format!("refused: {reason}"));
+                            }
+                        });
+                        ui.end_row();
+                    }
+                });
         };
         if g.is_empty() {
             rows(ui);

@@ -124,7 +124,8 @@ impl StackPanel {
             egui::Id::new(("layer-drag", mesh_name, i)),
             DraggedLayer(mesh_name.to_owned(), i),
             |ui| {
-                ui.label("⠿").on_hover_text("Drag onto another layer to move it there");
+                ui.label("☰")
+                    .on_hover_text("Drag onto another layer to move it there");
             },
         );
         let mut enabled = layer.enabled;
@@ -167,7 +168,7 @@ impl StackPanel {
             cx.apply_in_gesture(&r, op, label);
         }
         if ui
-            .small_button("⎘")
+            .small_button("📋")
             .on_hover_text("Duplicate the layer and its tool")
             .clicked()
             && let Ok((op, copy)) = Operation::duplicate_layer(doc, mesh_name, i)
@@ -177,21 +178,21 @@ impl StackPanel {
             cx.selection.select(Some(copy));
         }
         if ui
-            .add_enabled(i > 0, egui::Button::new("▼").small())
+            .add_enabled(i > 0, egui::Button::new("⏷").small())
             .on_hover_text("Move down")
             .clicked()
         {
             cx.apply(Operation::move_layer(mesh_name, i, i - 1));
         }
         if ui
-            .add_enabled(i + 1 < count, egui::Button::new("▲").small())
+            .add_enabled(i + 1 < count, egui::Button::new("⏶").small())
             .on_hover_text("Move up")
             .clicked()
         {
             cx.apply(Operation::move_layer(mesh_name, i, i + 1));
         }
         if ui
-            .small_button("✕")
+            .small_button("🗑")
             .on_hover_text("Remove the layer (the tool node stays)")
             .clicked()
             && let Ok(op) = Operation::remove_layer(doc, mesh_name, i)
@@ -204,7 +205,13 @@ impl StackPanel {
     }
 
     /// Adds a layer for any tool node.
-    fn add_layer_row(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>, mesh_name: &str, count: usize) {
+    fn add_layer_row(
+        &mut self,
+        ui: &mut egui::Ui,
+        cx: &mut PanelContext<'_>,
+        mesh_name: &str,
+        count: usize,
+    ) {
         let doc = cx.doc.document();
         let Ok(mesh) = doc.mesh(mesh_name) else {
             return;

@@ -4,6 +4,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // Tests may unwrap (house rules).
 
+use bevy::math::Vec3;
 use bevy_egui::egui;
 use ductile_bevy::prelude::*;
 use ductile_core::ffsd::{ControlPoint, FfsdTool};
@@ -15,7 +16,6 @@ use ductile_scene::document::{Document, LayerSpec, MeshNode, Node, NodeKind, Vol
 use ductile_scene::transform::Transform;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use bevy::math::Vec3;
 
 use super::add_menu::{AddRequest, add_menu_contents};
 use super::history::HistoryPanel;
@@ -157,17 +157,29 @@ fn add_lattice_on_the_selected_mesh_is_one_group_adding_a_node_and_a_layer() {
     h.get_by_label("Lattice (Bernstein)").click();
     h.run();
     let request = h.state().expect("an entry was picked");
-    assert_eq!(request, AddRequest::Tool(NewTool::Lattice(LatticeKind::Bernstein)));
+    assert_eq!(
+        request,
+        AddRequest::Tool(NewTool::Lattice(LatticeKind::Bernstein))
+    );
     // What the Studio makes of it, around a unit cube.
     let mut doc = SceneDocument::new(document());
     let place = Placement::around(&[Vec3::splat(-1.0), Vec3::ONE]).unwrap();
-    let added = crate::authoring::add_operation(doc.document(), &Selection::default(), "m", request, &place)
-        .unwrap()
-        .unwrap();
+    let added = crate::authoring::add_operation(
+        doc.document(),
+        &Selection::default(),
+        "m",
+        request,
+        &place,
+    )
+    .unwrap()
+    .unwrap();
     let Operation::Group { ops, .. } = &added.op else {
         panic!("one group: {:?}", added.op)
     };
-    assert!(matches!(ops[..], [Operation::AddNode { .. }, Operation::AddLayer { .. }]));
+    assert!(matches!(
+        ops[..],
+        [Operation::AddNode { .. }, Operation::AddLayer { .. }]
+    ));
     doc.apply(added.op, "", None).unwrap();
     assert_eq!(doc.history().len(), 1, "one undo step");
     assert_eq!(added.name, "lattice");
@@ -177,8 +189,10 @@ fn add_lattice_on_the_selected_mesh_is_one_group_adding_a_node_and_a_layer() {
 
 #[test]
 fn a_new_volume_masks_the_selected_layer() {
-    let mut selection = Selection::default();
-    selection.layer = Some(("m".to_owned(), 0));
+    let selection = Selection {
+        layer: Some(("m".to_owned(), 0)),
+        ..Default::default()
+    };
     let doc = document();
     let place = Placement::around(&[Vec3::splat(-1.0), Vec3::ONE]).unwrap();
     let added = crate::authoring::add_operation(
@@ -198,17 +212,26 @@ fn a_new_volume_masks_the_selected_layer() {
 
 #[test]
 fn the_stack_panel_solos_and_duplicates_layers() {
-    let mut h = harness(State::new(StackPanel::default()), |p, ui, cx| p.show(ui, cx));
+    let mut h = harness(State::new(StackPanel::default()), |p, ui, cx| {
+        p.show(ui, cx)
+    });
     h.run();
     h.get_by_label("S").click();
     h.run();
     let ops = h.state().ops();
     assert!(
-        matches!(ops[..], [Operation::SetLayerSolo { index: 0, new: true, .. }]),
+        matches!(
+            ops[..],
+            [Operation::SetLayerSolo {
+                index: 0,
+                new: true,
+                ..
+            }]
+        ),
         "{ops:?}"
     );
     h.state_mut().apply_commands();
-    h.get_by_label("⎘").click();
+    h.get_by_label("📋").click();
     h.run();
     let ops = h.state().ops();
     let Some(Operation::Group { ops: members, .. }) = ops.last() else {
@@ -232,7 +255,7 @@ fn the_outliner_adds_groups_renames_and_deletes() {
     h.state_mut().apply_commands();
     assert!(h.state().doc.document().node("group").is_ok());
     // Double-click renames in place; Enter applies.
-    h.get_by_label("◯ v").click();
+    h.get_by_label("⚪ v").click();
     h.run();
     h.state_mut().selection.select(Some("v".to_owned()));
     h.key_press(egui::Key::F2);
@@ -241,15 +264,18 @@ fn the_outliner_adds_groups_renames_and_deletes() {
     h.key_press(egui::Key::Enter);
     h.run();
     assert!(
-        h.state().ops().iter().any(|o| matches!(o, Operation::Rename { new, .. } if new == "v-ball")),
+        h.state()
+            .ops()
+            .iter()
+            .any(|o| matches!(o, Operation::Rename { new, .. } if new == "v-ball")),
         "{:?}",
         h.state().ops()
     );
     h.state_mut().apply_commands();
     assert!(h.state().doc.document().node("v-ball").is_ok());
-    // ✕ deletes the tool with its layer, in one step.
+    // 🗑 deletes the tool with its layer, in one step.
     let before = h.state().doc.history().len();
-    h.get_all_by_label("✕").nth(1).unwrap().click();
+    h.get_all_by_label("🗑").nth(1).unwrap().click();
     h.run();
     h.state_mut().apply_commands();
     assert_eq!(h.state().doc.history().len(), before + 1);
@@ -266,7 +292,10 @@ fn the_inspector_edits_a_tool_and_refuses_an_out_of_range_value() {
     h.get_by_label("+ point").click();
     h.run();
     let ops = h.state().ops();
-    let Some(Operation::SetTool { new: Tool::Ffsd(f), .. }) = ops.last() else {
+    let Some(Operation::SetTool {
+        new: Tool::Ffsd(f), ..
+    }) = ops.last()
+    else {
         panic!("{ops:?}")
     };
     assert_eq!(f.points.len(), 2);
@@ -277,7 +306,10 @@ fn the_inspector_edits_a_tool_and_refuses_an_out_of_range_value() {
             && n.numeric_value().is_some_and(|v| (v - 0.1).abs() < 1e-6)
     };
     // Drag the ε field 300 points to the left: at 0.001 per point it would reach −0.2.
-    let at = h.get(egui_kittest::kittest::By::new().predicate(is_epsilon)).rect().center();
+    let at = h
+        .get(egui_kittest::kittest::By::new().predicate(is_epsilon))
+        .rect()
+        .center();
     h.hover_at(at);
     h.run();
     h.drag_at(at);
@@ -290,7 +322,9 @@ fn the_inspector_edits_a_tool_and_refuses_an_out_of_range_value() {
     h.run();
     // Only the edits that kept ε > 0 were applied; the rest was refused with the reason.
     let last_epsilon = h.state().ops().iter().rev().find_map(|o| match o {
-        Operation::SetTool { new: Tool::Ffsd(f), .. } => Some(f.points[0].epsilon),
+        Operation::SetTool {
+            new: Tool::Ffsd(f), ..
+        } => Some(f.points[0].epsilon),
         _ => None,
     });
     assert!(last_epsilon.is_none_or(|e| e > 0.0), "{last_epsilon:?}");
@@ -310,7 +344,7 @@ fn the_history_panel_steps_and_jumps() {
     state.doc.jump(0).unwrap();
     let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
     h.run();
-    h.get_by_label("▶|").click();
+    h.get_by_label("⏭").click();
     h.run();
     assert!(matches!(h.state().commands[..], [DocumentCommand::Jump(1)]));
     h.state_mut().apply_commands();
@@ -325,7 +359,8 @@ fn the_influence_editor_masks_a_layer_with_a_volume() {
     state.selection.layer = Some(("m".to_owned(), 0));
     let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
     h.run();
-    h.get_by_label("influence (else every vertex, weight 1)").click();
+    h.get_by_label("influence (else every vertex, weight 1)")
+        .click();
     h.run();
     h.state_mut().apply_commands();
     h.run();
@@ -364,5 +399,8 @@ fn a_sketch_tool_asks_for_its_strokes_to_be_redrawn() {
     h.run();
     h.get_by_label("Redraw strokes…").click();
     h.run();
-    assert_eq!(h.state().requests, vec![PanelRequest::RedrawSketch("p".to_owned())]);
+    assert_eq!(
+        h.state().requests,
+        vec![PanelRequest::RedrawSketch("p".to_owned())]
+    );
 }

@@ -23,7 +23,7 @@ use ductile_history::operation::Operation;
 use ductile_scene::create::resized_lattice;
 use ductile_scene::handles::HandleId;
 
-use super::params::{REFUSED, Refusals, parameter_list, value_widget, meta};
+use super::params::{REFUSED, Refusals, meta, parameter_list, value_widget};
 use super::{PanelContext, PanelRequest};
 
 /// The tool section's state: refused edits and their reasons.
@@ -34,7 +34,12 @@ pub struct ToolEditor {
 }
 
 /// A combo box of labelled choices; returns the index picked when it changed.
-fn choice(ui: &mut egui::Ui, id: impl std::hash::Hash + std::fmt::Debug, current: usize, labels: &[&str]) -> Option<usize> {
+fn choice(
+    ui: &mut egui::Ui,
+    id: impl std::hash::Hash + std::fmt::Debug,
+    current: usize,
+    labels: &[&str],
+) -> Option<usize> {
     let mut picked = current;
     egui::ComboBox::from_id_salt(id)
         .selected_text(labels.get(current).copied().unwrap_or("?"))
@@ -46,9 +51,15 @@ fn choice(ui: &mut egui::Ui, id: impl std::hash::Hash + std::fmt::Debug, current
     (picked != current).then_some(picked)
 }
 
-fn count_edit(ui: &mut egui::Ui, label: &str, v: &mut u32, range: std::ops::RangeInclusive<u32>) -> bool {
+fn count_edit(
+    ui: &mut egui::Ui,
+    label: &str,
+    v: &mut u32,
+    range: std::ops::RangeInclusive<u32>,
+) -> bool {
     ui.label(label);
-    ui.add(egui::DragValue::new(v).range(range).speed(0.05)).changed()
+    ui.add(egui::DragValue::new(v).range(range).speed(0.05))
+        .changed()
 }
 
 impl ToolEditor {
@@ -139,7 +150,10 @@ fn structure(
                     ui.label(format!("{} constraints", d.constraints.len()));
                     let add = ui.button("+ constraint").clicked();
                     if add {
-                        let at = d.constraints.last().map_or(Anchor::Point(d.lattice.frame.origin), |c| c.at);
+                        let at = d
+                            .constraints
+                            .last()
+                            .map_or(Anchor::Point(d.lattice.frame.origin), |c| c.at);
                         d.constraints.push(DirectConstraint {
                             at,
                             displacement: Vec3::ZERO,
@@ -164,7 +178,8 @@ fn structure(
                 .on_hover_text("Sketch mode: draw this tool's strokes again (Esc cancels)")
                 .clicked()
             {
-                cx.requests.push(PanelRequest::RedrawSketch(name.to_owned()));
+                cx.requests
+                    .push(PanelRequest::RedrawSketch(name.to_owned()));
             }
             let (c, r) = sketch(ui, s);
             response = r;
@@ -185,7 +200,12 @@ fn ffsd(ui: &mut egui::Ui, f: &mut FfsdTool) -> bool {
                 PointMode::Virtual => 1,
                 PointMode::Directional { .. } => 2,
             };
-            if let Some(k) = choice(ui, ("mode", i), current, &["basic", "virtual", "directional"]) {
+            if let Some(k) = choice(
+                ui,
+                ("mode", i),
+                current,
+                &["basic", "virtual", "directional"],
+            ) {
                 p.mode = match k {
                     0 => PointMode::Basic,
                     1 => PointMode::Virtual,
@@ -209,7 +229,11 @@ fn ffsd(ui: &mut egui::Ui, f: &mut FfsdTool) -> bool {
     }
     ui.horizontal(|ui| {
         if ui.button("+ point").clicked() {
-            let mut p = f.points.last().copied().unwrap_or(ControlPoint::basic(Vec3::ZERO, 0.5, 2.0, 0.1));
+            let mut p =
+                f.points
+                    .last()
+                    .copied()
+                    .unwrap_or(ControlPoint::basic(Vec3::ZERO, 0.5, 2.0, 0.1));
             p.position += Vec3::X * p.epsilon;
             if let PointMode::Directional { reference } = &mut p.mode {
                 *reference += Vec3::X * p.epsilon;
@@ -224,7 +248,12 @@ fn ffsd(ui: &mut egui::Ui, f: &mut FfsdTool) -> bool {
             Some(HeightLimit::Below { .. }) => 2,
             Some(HeightLimit::Both { .. }) => 3,
         };
-        if let Some(k) = choice(ui, "height", current, &["none", "from above", "from below", "both sides"]) {
+        if let Some(k) = choice(
+            ui,
+            "height",
+            current,
+            &["none", "from above", "from below", "both sides"],
+        ) {
             f.height = match k {
                 0 => None,
                 1 => Some(HeightLimit::Above { theta: 0.8 }),
@@ -244,7 +273,9 @@ fn dogme(ui: &mut egui::Ui, d: &mut DogmeTool) -> bool {
     let mut changed = false;
     ui.horizontal(|ui| {
         ui.label("degree");
-        changed |= ui.add(egui::DragValue::new(&mut d.degree).speed(0.05)).changed();
+        changed |= ui
+            .add(egui::DragValue::new(&mut d.degree).speed(0.05))
+            .changed();
     });
     let mut remove = None;
     for (i, c) in d.constraints.iter_mut().enumerate() {
@@ -252,14 +283,23 @@ fn dogme(ui: &mut egui::Ui, d: &mut DogmeTool) -> bool {
             ui.label(format!("constraint {i}"));
             let anchor = usize::from(matches!(c.at, Anchor::Vertex(_)));
             if let Some(k) = choice(ui, ("anchor", i), anchor, &["free point", "mesh vertex"]) {
-                c.at = if k == 0 { Anchor::Point(Vec3::ZERO) } else { Anchor::Vertex(0) };
+                c.at = if k == 0 {
+                    Anchor::Point(Vec3::ZERO)
+                } else {
+                    Anchor::Vertex(0)
+                };
                 changed = true;
             }
             if let Anchor::Vertex(v) = &mut c.at {
                 changed |= ui.add(egui::DragValue::new(v).prefix("vertex ")).changed();
             }
             let support = usize::from(matches!(c.support, Support::Box { .. }));
-            if let Some(k) = choice(ui, ("support", i), support, &["sphere support", "box support"]) {
+            if let Some(k) = choice(
+                ui,
+                ("support", i),
+                support,
+                &["sphere support", "box support"],
+            ) {
                 let size = match c.support {
                     Support::Sphere { radius } => radius,
                     Support::Box { half_extents, .. } => half_extents.max_element(),
@@ -350,7 +390,12 @@ fn axial(ui: &mut egui::Ui, a: &mut AxialTool) -> bool {
             AxisShape::Bezier => 1,
             AxisShape::BSpline { .. } => 2,
         };
-        if let Some(k) = choice(ui, "axis-shape", current, &["polyline", "Bézier", "B-spline"]) {
+        if let Some(k) = choice(
+            ui,
+            "axis-shape",
+            current,
+            &["polyline", "Bézier", "B-spline"],
+        ) {
             a.shape = match k {
                 0 => AxisShape::Polyline,
                 1 => AxisShape::Bezier,
@@ -361,7 +406,9 @@ fn axial(ui: &mut egui::Ui, a: &mut AxialTool) -> bool {
             changed = true;
         }
         if let AxisShape::BSpline { degree } = &mut a.shape {
-            changed |= ui.add(egui::DragValue::new(degree).prefix("degree ").speed(0.05)).changed();
+            changed |= ui
+                .add(egui::DragValue::new(degree).prefix("degree ").speed(0.05))
+                .changed();
         }
         ui.label("falloff");
         changed |= falloff_choice(ui, "axial-falloff", &mut a.falloff);
@@ -398,7 +445,12 @@ fn curve(ui: &mut egui::Ui, c: &mut CurveTool) -> bool {
     ui.horizontal(|ui| {
         ui.label("basis");
         let current = usize::from(matches!(c.basis, CurveBasis::BSpline { .. }));
-        if let Some(k) = choice(ui, "curve-basis", current, &["Bézier (De Casteljau)", "B-spline (De Boor)"]) {
+        if let Some(k) = choice(
+            ui,
+            "curve-basis",
+            current,
+            &["Bézier (De Casteljau)", "B-spline (De Boor)"],
+        ) {
             c.basis = if k == 0 {
                 CurveBasis::Bezier
             } else {
@@ -409,7 +461,9 @@ fn curve(ui: &mut egui::Ui, c: &mut CurveTool) -> bool {
             changed = true;
         }
         if let CurveBasis::BSpline { degree } = &mut c.basis {
-            changed |= ui.add(egui::DragValue::new(degree).prefix("degree ").speed(0.05)).changed();
+            changed |= ui
+                .add(egui::DragValue::new(degree).prefix("degree ").speed(0.05))
+                .changed();
         }
     });
     ui.horizontal(|ui| {
@@ -448,8 +502,12 @@ fn surface(ui: &mut egui::Ui, s: &mut ShapeSurfaceTool) -> bool {
             changed = true;
         }
         ui.label("degrees");
-        changed |= ui.add(egui::DragValue::new(&mut s.degree.0).speed(0.05)).changed();
-        changed |= ui.add(egui::DragValue::new(&mut s.degree.1).speed(0.05)).changed();
+        changed |= ui
+            .add(egui::DragValue::new(&mut s.degree.0).speed(0.05))
+            .changed();
+        changed |= ui
+            .add(egui::DragValue::new(&mut s.degree.1).speed(0.05))
+            .changed();
     });
     changed
 }
@@ -510,15 +568,21 @@ fn sketch(ui: &mut egui::Ui, s: &mut SketchTool) -> (bool, Option<egui::Response
         let mut given = s.normal.is_some();
         if ui
             .checkbox(&mut given, "normal")
-            .on_hover_text("The sketch plane's normal; off: towards the eye of the reference stroke")
+            .on_hover_text(
+                "The sketch plane's normal; off: towards the eye of the reference stroke",
+            )
             .changed()
         {
             s.normal = given.then_some(Vec3::Z);
             changed = true;
         }
         if let Some(n) = &mut s.normal
-            && let Some((Value::Vector(v), r)) =
-                value_widget(ui, egui::Id::new("sketch-normal"), &Value::Vector(*n), meta("normal"))
+            && let Some((Value::Vector(v), r)) = value_widget(
+                ui,
+                egui::Id::new("sketch-normal"),
+                &Value::Vector(*n),
+                meta("normal"),
+            )
         {
             *n = v;
             response = Some(r);
@@ -527,7 +591,10 @@ fn sketch(ui: &mut egui::Ui, s: &mut SketchTool) -> (bool, Option<egui::Response
     });
     // The spline controls: on or off (F(s) = s, or 1 for the scale).
     ui.horizontal(|ui| {
-        let mut toggle = |ui: &mut egui::Ui, label: &str, f: &mut Option<SplineControl>, start: SplineControl| {
+        let mut toggle = |ui: &mut egui::Ui,
+                          label: &str,
+                          f: &mut Option<SplineControl>,
+                          start: SplineControl| {
             let mut on = f.is_some();
             if ui.checkbox(&mut on, label).changed() {
                 *f = on.then_some(start);
@@ -542,7 +609,15 @@ fn sketch(ui: &mut egui::Ui, s: &mut SketchTool) -> (bool, Option<egui::Response
                 toggle(ui, "twist speed F(s)", speed, SplineControl::identity(5, 3));
             }
         }
-        toggle(ui, "scale F(s)", &mut s.scale, SplineControl { values: vec![1.0; 5], degree: 3 });
+        toggle(
+            ui,
+            "scale F(s)",
+            &mut s.scale,
+            SplineControl {
+                values: vec![1.0; 5],
+                degree: 3,
+            },
+        );
     });
     (changed, response)
 }
@@ -559,17 +634,32 @@ fn selected_points(
         match (tool, id) {
             (Tool::Lattice(l), HandleId::Lattice(i, j, k)) => {
                 let at = (*i, *j, *k);
-                let edit = l.points.iter().find(|e| e.at == at).copied().unwrap_or(ControlEdit {
-                    at,
-                    offset: Vec3::ZERO,
-                    weight: 1.0,
-                });
+                let edit = l
+                    .points
+                    .iter()
+                    .find(|e| e.at == at)
+                    .copied()
+                    .unwrap_or(ControlEdit {
+                        at,
+                        offset: Vec3::ZERO,
+                        weight: 1.0,
+                    });
                 ui.label(format!("control point ({i}, {j}, {k})"));
                 ui.horizontal(|ui| {
                     ui.label("offset");
-                    let r = value_widget(ui, egui::Id::new(("lp", at)), &Value::Vector(edit.offset), meta("offset"));
+                    let r = value_widget(
+                        ui,
+                        egui::Id::new(("lp", at)),
+                        &Value::Vector(edit.offset),
+                        meta("offset"),
+                    );
                     ui.label("weight");
-                    let w = value_widget(ui, egui::Id::new(("lw", at)), &Value::Scalar(edit.weight), meta("weight"));
+                    let w = value_widget(
+                        ui,
+                        egui::Id::new(("lw", at)),
+                        &Value::Scalar(edit.weight),
+                        meta("weight"),
+                    );
                     let mut e = edit;
                     let response = match (r, w) {
                         (Some((Value::Vector(v), r)), _) => {
@@ -592,23 +682,37 @@ fn selected_points(
             }
             (Tool::ShapeSurface(s), HandleId::SurfaceMoved(i, j)) => {
                 let at = (*i, *j);
-                let offset = s.moves.iter().find(|e| e.at == at).map_or(Vec3::ZERO, |e| e.offset);
-                let height = s.heights.iter().find(|e| e.at == at).map_or(0.0, |e| e.height);
+                let offset = s
+                    .moves
+                    .iter()
+                    .find(|e| e.at == at)
+                    .map_or(Vec3::ZERO, |e| e.offset);
+                let height = s
+                    .heights
+                    .iter()
+                    .find(|e| e.at == at)
+                    .map_or(0.0, |e| e.height);
                 ui.label(format!("surface point ({i}, {j})"));
                 ui.horizontal(|ui| {
                     ui.label("move");
-                    if let Some((Value::Vector(v), r)) =
-                        value_widget(ui, egui::Id::new(("sm", at)), &Value::Vector(offset), meta("offset"))
-                    {
+                    if let Some((Value::Vector(v), r)) = value_widget(
+                        ui,
+                        egui::Id::new(("sm", at)),
+                        &Value::Vector(offset),
+                        meta("offset"),
+                    ) {
                         let mut s = s.clone();
                         s.moves.retain(|e| e.at != at);
                         s.moves.push(SurfaceEdit { at, offset: v });
                         out = Some((Tool::ShapeSurface(s), r));
                     }
                     ui.label("height");
-                    if let Some((Value::Scalar(h), r)) =
-                        value_widget(ui, egui::Id::new(("sh", at)), &Value::Scalar(height), meta("height"))
-                    {
+                    if let Some((Value::Scalar(h), r)) = value_widget(
+                        ui,
+                        egui::Id::new(("sh", at)),
+                        &Value::Scalar(height),
+                        meta("height"),
+                    ) {
                         let mut s = s.clone();
                         s.heights.retain(|e| e.at != at);
                         s.heights.push(HeightEdit { at, height: h });
