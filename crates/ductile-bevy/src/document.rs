@@ -22,6 +22,9 @@ pub struct SceneDocument {
     saved: Document,
     modified: bool,
     next_gesture: u64,
+    /// Moves on when the document and its history are replaced (another file opened), so
+    /// that what views remember per history step can be forgotten.
+    epoch: u64,
 }
 
 impl Default for SceneDocument {
@@ -48,6 +51,7 @@ impl SceneDocument {
             revision: 0,
             modified: false,
             next_gesture: 1,
+            epoch: 0,
         }
     }
 
@@ -56,7 +60,14 @@ impl SceneDocument {
     pub fn replace(&mut self, history: History, document: Document) {
         self.document = document;
         self.history = history;
+        self.epoch += 1;
         self.changed();
+    }
+
+    /// A number that changes when the document and its history are replaced (not by edits).
+    #[must_use]
+    pub fn epoch(&self) -> u64 {
+        self.epoch
     }
 
     /// Moves the revision on and compares the live document with the saved one.
@@ -189,6 +200,22 @@ impl DocumentCommand {
     }
 }
 
+/// What an applied [`DocumentCommand`] did to the history, for views that remember something
+/// per step (the Studio restores the selection that went with an undone or redone step).
+#[derive(Message, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DocumentChange {
+    /// A new step was recorded at this index (0-based); later steps were dropped.
+    Pushed(usize),
+    /// An edit merged into the step at this index (the same gesture).
+    Merged(usize),
+    /// The step at this index was undone.
+    Undone(usize),
+    /// The step at this index was redone.
+    Redone(usize),
+    /// The history cursor jumped (possibly over many steps).
+    Jumped,
+}
+
 /// The last edit that was refused, for the status bar (cleared by the next successful one).
 #[derive(Resource, Debug, Default, Clone, PartialEq)]
 pub struct EditStatus {
@@ -202,16 +229,36 @@ pub fn apply_document_commands(
     mut commands: MessageReader<DocumentCommand>,
     mut doc: ResMut<SceneDocument>,
     mut status: ResMut<EditStatus>,
+    mut changes: MessageWriter<DocumentChange>,
 ) {
     for command in commands.read() {
+        let cursor = doc.history().cursor();
         let result = match command.clone() {
-            DocumentCommand::Apply { op, label, gesture } => doc.apply(*op, label, gesture),
-            DocumentCommand::Undo => doc.undo().map(|_| ()),
-            DocumentCommand::Redo => doc.redo().map(|_| ()),
-            DocumentCommand::Jump(n) => doc.jump(n),
+            DocumentCommand::Apply { op, label, gesture } => {
+                doc.apply(*op, label, gesture).map(|()| {
+                    let now = doc.history().cursor();
+                    Some(if now > cursor {
+                        DocumentChange::Pushed(now - 1)
+                    } else {
+                        DocumentChange::Merged(now.saturating_sub(1))
+                    })
+                })
+            }
+            DocumentCommand::Undo => doc
+                .undo()
+                .map(|done| done.then(|| DocumentChange::Undone(cursor - 1))),
+            DocumentCommand::Redo => doc
+                .redo()
+                .map(|done| done.then_some(DocumentChange::Redone(cursor))),
+            DocumentCommand::Jump(n) => doc.jump(n).map(|()| Some(DocumentChange::Jumped)),
         };
         match result {
-            Ok(()) => status.last_error = None,
+            Ok(change) => {
+                status.last_error = None;
+                if let Some(c) = change {
+                    changes.write(c);
+                }
+            }
             Err(e) => {
                 warn!("edit refused: {e}");
                 status.last_error = Some(e.to_string());

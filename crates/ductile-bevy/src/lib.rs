@@ -25,11 +25,14 @@ pub mod heatmap;
 pub mod rest;
 pub mod selection;
 pub mod sync;
+pub mod undo_selection;
 
 use bevy::picking::events::{DragStart, Pointer};
 use bevy::prelude::*;
 
-use crate::document::{DocumentCommand, EditStatus, SceneDocument, apply_document_commands};
+use crate::document::{
+    DocumentChange, DocumentCommand, EditStatus, SceneDocument, apply_document_commands,
+};
 use crate::evaluate::{
     EvaluationSettings, EvaluationStats, HeatMapSettings, MeshMaterial, attach_mesh_evaluation,
     evaluate_meshes,
@@ -47,7 +50,7 @@ pub mod prelude {
     pub use crate::DuctilePlugin;
     pub use crate::DuctileSystems;
     pub use crate::components::{HandleMarker, MeshNodeMarker, SceneNode};
-    pub use crate::document::{DocumentCommand, EditStatus, SceneDocument};
+    pub use crate::document::{DocumentChange, DocumentCommand, EditStatus, SceneDocument};
     pub use crate::drag::AxisConstraint;
     pub use crate::error::DuctileBevyError;
     pub use crate::evaluate::{
@@ -93,7 +96,10 @@ impl Plugin for DuctilePlugin {
             .init_resource::<HandleSettings>()
             .init_resource::<DragState>()
             .init_resource::<gizmos::GizmoSettings>()
+            .init_resource::<undo_selection::SelectionMemory>()
             .add_message::<DocumentCommand>()
+            .add_message::<DocumentChange>()
+            .add_systems(First, undo_selection::remember_frame_selection)
             .configure_sets(
                 Update,
                 (
@@ -108,7 +114,12 @@ impl Plugin for DuctilePlugin {
             .add_systems(
                 Update,
                 (
-                    apply_document_commands.in_set(DuctileSystems::Edit),
+                    (
+                        apply_document_commands,
+                        undo_selection::restore_selection_on_undo,
+                    )
+                        .chain()
+                        .in_set(DuctileSystems::Edit),
                     (
                         sync_document_entities.run_if(resource_changed::<SceneDocument>),
                         sync_handles,

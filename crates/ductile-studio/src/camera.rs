@@ -44,12 +44,38 @@ impl OrbitCamera {
         Transform::from_translation(eye).looking_at(self.focus, Vec3::Y)
     }
 
-    /// Frames a box: looks at its centre from far enough to see a sphere around it with a
-    /// vertical field of view `fov` (radians).
-    pub fn frame(&mut self, min: Vec3, max: Vec3, fov: f32) {
+    /// Frames a box: looks at its centre, keeping the direction, from just far enough that
+    /// all eight corners are inside the view (vertical field of view `fov` in radians,
+    /// `aspect` = width / height), with a 5% margin. A corner `p` (relative to the centre) at
+    /// depth `d + p·f` is inside when `|p·r| ≤ (d + p·f)·tan(h/2)` and `|p·u| ≤ (d + p·f)·
+    /// tan(v/2)`, with `tan(h/2) = tan(v/2)·aspect`; the distance is the largest `d` any
+    /// corner asks for.
+    pub fn frame(&mut self, min: Vec3, max: Vec3, fov: f32, aspect: f32) {
         self.focus = (min + max) * 0.5;
-        let radius = ((max - min).length() * 0.5).max(1e-3);
-        self.distance = radius / (fov * 0.5).sin() * 1.1;
+        let t = self.transform();
+        let (right, up, forward) = (*t.right(), *t.up(), *t.forward());
+        let tan_v = (fov * 0.5).tan() * 0.95;
+        let tan_h = tan_v
+            * if aspect.is_finite() && aspect > 0.0 {
+                aspect
+            } else {
+                1.0
+            };
+        let mut distance = 1e-3_f32;
+        for i in 0..8 {
+            let corner = Vec3::new(
+                if i & 1 == 0 { min.x } else { max.x },
+                if i & 2 == 0 { min.y } else { max.y },
+                if i & 4 == 0 { min.z } else { max.z },
+            );
+            let p = corner - self.focus;
+            let depth = p.dot(forward);
+            distance = distance
+                .max(p.dot(right).abs() / tan_h - depth)
+                .max(p.dot(up).abs() / tan_v - depth)
+                .max(1e-3 - depth);
+        }
+        self.distance = distance;
     }
 }
 
@@ -164,6 +190,24 @@ pub fn vertical_fov(projection: &Projection) -> f32 {
     }
 }
 
+/// The width / height of the part of the window a camera draws in (its viewport, else the
+/// projection's aspect; 1 when neither is known).
+#[must_use]
+pub fn view_aspect(projection: &Projection, camera: &Camera) -> f32 {
+    let aspect = match (&camera.viewport, projection) {
+        (Some(view), _) if view.physical_size.y > 0 => {
+            view.physical_size.x as f32 / view.physical_size.y as f32
+        }
+        (_, Projection::Perspective(p)) => p.aspect_ratio,
+        _ => 1.0,
+    };
+    if aspect.is_finite() && aspect > 0.0 {
+        aspect
+    } else {
+        1.0
+    }
+}
+
 /// A request from the View menu to frame the selection (as F does).
 #[derive(Resource, Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct FrameRequest(pub bool);
@@ -179,18 +223,18 @@ pub fn frame_selected(
     entities: Res<NodeEntities>,
     meshes: Query<(&bevy::camera::primitives::Aabb, &GlobalTransform), With<MeshEvaluation>>,
     handles: Query<(&HandleMarker, &GlobalTransform)>,
-    mut cameras: Query<(&mut OrbitCamera, &Projection)>,
+    mut cameras: Query<(&mut OrbitCamera, &Projection, &Camera)>,
 ) {
     let asked = std::mem::take(&mut request.0);
     if !(asked || keyboard.0 && keys.just_pressed(KeyCode::KeyF)) {
         return;
     }
-    let Ok((mut orbit, projection)) = cameras.single_mut() else {
+    let Ok((mut orbit, projection, camera)) = cameras.single_mut() else {
         return;
     };
     let fov = vertical_fov(projection);
     if let Some((min, max)) = selection_bounds(&selection, &entities, &meshes, &handles) {
-        orbit.frame(min, max, fov);
+        orbit.frame(min, max, fov, view_aspect(projection, camera));
     }
 }
 
@@ -244,4 +288,41 @@ pub fn selection_bounds(
         max += Vec3::splat(0.05);
     }
     Some((min, max))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Framing keeps every corner inside both fields of view and one at the margin.
+    #[test]
+    fn framing_fits_the_box_in_a_narrow_view() {
+        let (min, max) = (Vec3::new(-2.0, -0.5, -1.0), Vec3::new(2.0, 0.5, 1.0));
+        for (yaw, pitch, aspect) in [(0.0, 0.0, 0.5), (0.7, 0.3, 1.6), (2.0, -0.4, 1.0)] {
+            let mut orbit = OrbitCamera {
+                yaw,
+                pitch,
+                ..OrbitCamera::default()
+            };
+            let fov = std::f32::consts::FRAC_PI_4;
+            orbit.frame(min, max, fov, aspect);
+            let t = orbit.transform();
+            let (tan_v, mut widest) = ((fov * 0.5).tan(), 0.0_f32);
+            for i in 0..8 {
+                let c = Vec3::new(
+                    if i & 1 == 0 { min.x } else { max.x },
+                    if i & 2 == 0 { min.y } else { max.y },
+                    if i & 4 == 0 { min.z } else { max.z },
+                );
+                let local = t.compute_affine().inverse().transform_point3(c);
+                let depth = -local.z;
+                assert!(depth > 0.0);
+                let x = (local.x / depth) / (tan_v * aspect);
+                let y = (local.y / depth) / tan_v;
+                assert!(x.abs() <= 0.951 && y.abs() <= 0.951, "{x} {y}");
+                widest = widest.max(x.abs()).max(y.abs());
+            }
+            assert!(widest > 0.94, "tight: {widest}");
+        }
+    }
 }

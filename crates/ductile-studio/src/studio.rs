@@ -12,7 +12,7 @@ use ductile_io::project::Project;
 
 use crate::camera::{
     KeyboardToViewport, OrbitCamera, PointerOverViewport, frame_selected, orbit_camera,
-    selection_bounds, vertical_fov,
+    selection_bounds, vertical_fov, view_aspect,
 };
 use crate::files::{FileDialogs, StudioAction, run_actions};
 use crate::panels::Gestures;
@@ -273,18 +273,22 @@ fn frame_on_open(
     entities: Res<NodeEntities>,
     meshes: Query<(&bevy::camera::primitives::Aabb, &GlobalTransform), With<MeshEvaluation>>,
     handles: Query<(&HandleMarker, &GlobalTransform)>,
-    mut cameras: Query<(&mut OrbitCamera, &Projection)>,
+    mut cameras: Query<(&mut OrbitCamera, &Projection, &Camera)>,
 ) {
     if !pending.0 || meshes.is_empty() {
         return;
     }
-    let Ok((mut orbit, projection)) = cameras.single_mut() else {
+    // Wait for the viewport between the panels: the framing depends on its shape.
+    let Ok((mut orbit, projection, camera)) = cameras.single_mut() else {
         return;
     };
+    if camera.viewport.is_none() {
+        return;
+    }
     let fov = vertical_fov(projection);
     let everything = Selection::default();
     if let Some((min, max)) = selection_bounds(&everything, &entities, &meshes, &handles) {
-        orbit.frame(min, max, fov);
+        orbit.frame(min, max, fov, view_aspect(projection, camera));
         pending.0 = false;
     }
 }

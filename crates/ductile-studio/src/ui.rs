@@ -62,6 +62,11 @@ pub struct UiOutputs<'w> {
     sketch: ResMut<'w, SketchState>,
 }
 
+/// The left panel's width at start (outliner, stack, history), in logical pixels.
+pub const LEFT_WIDTH: f32 = 360.0;
+/// The right panel's width at start (inspector, identikit), in logical pixels.
+pub const RIGHT_WIDTH: f32 = 440.0;
+
 /// Draws every panel and forwards what they asked for.
 #[allow(clippy::too_many_arguments)]
 pub fn studio_ui(
@@ -125,32 +130,45 @@ pub fn studio_ui(
         panels.status.show(ui, &info);
     });
 
+    // The side panels keep the width the user gives them (dragging their edge): content
+    // wider than that scrolls sideways instead of widening the panel, so the viewport does
+    // not jump when a long name appears.
     let left = egui::Panel::left("left-panel")
         .resizable(true)
-        .default_size(270.0)
+        .default_size(LEFT_WIDTH)
         .show(&mut root, |ui| {
-            ui.heading("Scene");
-            panels.outliner.show(ui, &mut cx);
-            ui.separator();
-            ui.heading("Stack");
-            panels.stack.show(ui, &mut cx);
-            ui.separator();
-            ui.heading("History");
-            panels.history.show(ui, &mut cx);
+            egui::ScrollArea::horizontal()
+                .id_salt("left-panel-h")
+                .auto_shrink([false, false])
+                .show(ui, |ui| {
+                    ui.heading("Scene");
+                    panels.outliner.show(ui, &mut cx);
+                    ui.separator();
+                    ui.heading("Stack");
+                    panels.stack.show(ui, &mut cx);
+                    ui.separator();
+                    ui.heading("History");
+                    panels.history.show(ui, &mut cx);
+                });
         });
 
     let right = egui::Panel::right("right-panel")
         .resizable(true)
-        .default_size(300.0)
+        .default_size(RIGHT_WIDTH)
         .show(&mut root, |ui| {
-            ui.heading("Inspector");
-            egui::ScrollArea::vertical()
-                .id_salt("inspector")
-                .max_height(ui.available_height() * 0.6)
-                .show(ui, |ui| panels.inspector.show(ui, &mut cx));
-            ui.separator();
-            ui.heading("Identikit");
-            panels.macros.show(ui, &mut cx);
+            egui::ScrollArea::horizontal()
+                .id_salt("right-panel-h")
+                .auto_shrink([false, false])
+                .show(ui, |ui| {
+                    ui.heading("Inspector");
+                    egui::ScrollArea::vertical()
+                        .id_salt("inspector")
+                        .max_height(ui.available_height() * 0.6)
+                        .show(ui, |ui| panels.inspector.show(ui, &mut cx));
+                    ui.separator();
+                    ui.heading("Identikit");
+                    panels.macros.show(ui, &mut cx);
+                });
         });
 
     if let Some(a) = dialogs.show(&ctx) {

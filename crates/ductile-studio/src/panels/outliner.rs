@@ -169,13 +169,18 @@ impl Outliner {
                 } else {
                     let selected = cx.selection.is_selected(name);
                     let text = format!("{} {name}", icon(&node.kind));
-                    let r = ui
-                        .dnd_drag_source(
-                            egui::Id::new(("outliner-drag", name)),
-                            DraggedNode(name.to_owned()),
-                            |ui| ui.selectable_label(selected, text),
-                        )
-                        .inner;
+                    // One widget senses both: a click selects, a drag carries the node
+                    // (a drag source laid over the label would swallow quick clicks).
+                    let r = ui.add(
+                        egui::Button::selectable(selected, text)
+                            .sense(egui::Sense::click_and_drag()),
+                    );
+                    r.dnd_set_drag_payload(DraggedNode(name.to_owned()));
+                    if r.dragged() {
+                        egui::containers::Tooltip::for_widget(&r)
+                            .at_pointer()
+                            .show(|ui| ui.label(format!("{} {name}", icon(&node.kind))));
+                    }
                     if r.clicked() {
                         cx.selection.select(Some(name.to_owned()));
                         if let NodeKind::Mesh(_) = node.kind {

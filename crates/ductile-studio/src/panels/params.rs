@@ -301,6 +301,22 @@ impl Refusals {
 /// The colour of refusal messages.
 pub const REFUSED: egui::Color32 = egui::Color32::from_rgb(240, 110, 90);
 
+/// `channels` grouped by their path's prefix ([`group`]), one group per prefix in the order
+/// of first appearance (a point's `mode.reference` sits between its position and γ, and must
+/// not split the point in two: two groups of one name would also clash in egui's ids).
+#[must_use]
+pub fn grouped(channels: &[(String, Value)]) -> Vec<(&str, Vec<&(String, Value)>)> {
+    let mut groups: Vec<(&str, Vec<&(String, Value)>)> = Vec::new();
+    for c in channels {
+        let g = group(&c.0);
+        match groups.iter_mut().find(|(name, _)| *name == g) {
+            Some((_, items)) => items.push(c),
+            None => groups.push((g, vec![c])),
+        }
+    }
+    groups
+}
+
 /// Lists `channels` (path, value) grouped by their path's prefix, one row each; returns the
 /// edit made this frame, if any.
 pub fn parameter_list(
@@ -310,14 +326,7 @@ pub fn parameter_list(
     refusals: &Refusals,
 ) -> Option<ParamEdit> {
     let mut edit = None;
-    let mut groups: Vec<(&str, Vec<&(String, Value)>)> = Vec::new();
-    for c in channels {
-        let g = group(&c.0);
-        match groups.last_mut() {
-            Some((name, items)) if *name == g => items.push(c),
-            _ => groups.push((g, vec![c])),
-        }
-    }
+    let groups = grouped(channels);
     let many = groups.len() > 6;
     for (g, items) in groups {
         let rows = |ui: &mut egui::Ui| {
@@ -355,4 +364,24 @@ pub fn parameter_list(
         }
     }
     edit
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_point_is_one_group_even_around_its_mode() {
+        let c = |p: &str| (p.to_owned(), Value::Scalar(0.0));
+        let channels = [
+            c("points[0].position"),
+            c("points[0].mode.reference"),
+            c("points[0].gamma"),
+            c("points[1].position"),
+            c("gain"),
+        ];
+        let names: Vec<&str> = grouped(&channels).iter().map(|(g, _)| *g).collect();
+        assert_eq!(names, ["points[0]", "points[0].mode", "points[1]", ""]);
+        assert_eq!(grouped(&channels)[0].1.len(), 2);
+    }
 }

@@ -1,0 +1,331 @@
+#!/usr/bin/env python3
+"""Walks the Studio's authoring stories as a user would, under Xvfb with real X input.
+
+Usage: stories.py STUDIO_BINARY OUT_DIR
+
+Needs what `drive.py` needs (Xvfb, xdotool, xwd, software Vulkan). Each story starts the
+Studio afresh in a 1280x800 window, works only with the mouse and the keyboard, checks every
+step on the pixels of the 3-D view, and undoes it with one Ctrl+Z (the view must come back
+pixel for pixel) before redoing it and going on:
+
+1. head (the README's first command): Shift+A over the forehead ▸ FFSD control point — the
+   head changes and the point's handle sits where the cursor was; select the handle and drag
+   it up — the head follows; Ctrl+Z undoes the drag.
+2. Spot (`scenes/spot.ron`): Add ▸ Lattice (Bernstein) — a lattice fits the cow; drag its
+   top control point — the cow deforms; Add ▸ Sphere volume — the new volume masks the
+   lattice's layer, so the deformation changes; Ctrl+Z after each.
+3. MakeHuman's body (`scenes/makehuman-body.ron`): Add ▸ Sketch bend, draw the reference stroke down the arm (the region of interest shows in the
+   paper's blue-to-red ramp of s(v), the hand beyond it as a rigid part), draw the target
+   stroke bent at the elbow — the forearm goes where it was drawn; Ctrl+Z undoes the whole
+   sketch.
+
+Screenshots of every step are written to OUT_DIR as PNG. Exits 0 only when every story
+passes; otherwise 1, naming the story and the step. Positions are those of the default
+1280x800 layout (left panel 360 px, right panel 440 px) and the scenes' default framing.
+"""
+import os
+import subprocess
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from drive import HEIGHT, WIDTH, write_png, xwd_rgb  # noqa: E402
+
+# The 3-D view of the default layout (between the side panels, under the menu bar).
+VIEW = (365, 40, 835, 760)
+ADD_MENU = (88, 11)
+# Rows of the Add menu (menu bar), by label: (x, y) of the entry.
+MENU = {
+    "Lattice (Bernstein)": (136, 201),
+    "Sketch bend": (160, 273),
+    "Sphere volume": (127, 342),
+}
+# Shift+A opens the same menu at the cursor: the first entry's offset from the cursor.
+POPUP_FFSD = (60, 58)
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+class Failed(Exception):
+    """A story step that did not hold."""
+
+
+class Studio:
+    """One Studio process on its own Xvfb display."""
+
+    def __init__(self, binary, out_dir, story, display, args=()):
+        self.out_dir, self.story = out_dir, story
+        self.display = display
+        self.xvfb = subprocess.Popen(["Xvfb", self.display, "-screen", "0",
+                                      f"{WIDTH}x{HEIGHT}x24"],
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        self.env = dict(os.environ, DISPLAY=self.display)
+        time.sleep(2)
+        self.log = open(os.path.join(out_dir, f"{story}-studio.log"), "w")
+        self.app = subprocess.Popen([binary, "--size", f"{WIDTH}x{HEIGHT}", *args],
+                                    env=self.env, stdout=self.log, stderr=subprocess.STDOUT,
+                                    cwd=ROOT)
+        for _ in range(120):
+            found = subprocess.run(["xdotool", "search", "--name", "Ductile Studio"],
+                                   env=self.env, capture_output=True, text=True).stdout.split()
+            if found:
+                break
+            if self.app.poll() is not None:
+                raise Failed(f"the Studio exited with status {self.app.returncode} "
+                             f"(see {story}-studio.log)")
+            time.sleep(0.5)
+        else:
+            raise Failed("no Studio window after 60 s")
+        self.xdo("windowfocus", "--sync", found[0])
+
+    def close(self):
+        self.app.kill()
+        self.xvfb.kill()
+        self.log.close()
+
+    def xdo(self, *args):
+        subprocess.run(["xdotool", *map(str, args)], env=self.env, check=True)
+
+    def shot(self, name, settle=2.0):
+        time.sleep(settle)
+        s = xwd_rgb(self.display)
+        write_png(os.path.join(self.out_dir, f"{self.story}-{name}.png"), *s)
+        return s
+
+    def click(self, x, y, button=1):
+        self.xdo("mousemove", x, y)
+        time.sleep(0.5)
+        self.xdo("mousedown", button)
+        time.sleep(0.3)
+        self.xdo("mouseup", button)
+        time.sleep(0.5)
+
+    def key(self, keys):
+        self.xdo("key", keys)
+        time.sleep(1.0)
+
+    def drag(self, points, steps=8, pause=0.15):
+        """Presses at the first point, moves through the others, releases at the last."""
+        self.xdo("mousemove", *points[0])
+        time.sleep(0.4)
+        self.xdo("mousedown", 1)
+        time.sleep(0.4)
+        for (x0, y0), (x1, y1) in zip(points, points[1:]):
+            for k in range(1, steps + 1):
+                self.xdo("mousemove", round(x0 + (x1 - x0) * k / steps),
+                         round(y0 + (y1 - y0) * k / steps))
+                time.sleep(pause)
+        time.sleep(0.4)
+        self.xdo("mouseup", 1)
+
+
+def pixels(shot, box=VIEW):
+    """The pixels of `box` as a list of (x, y, (r, g, b))."""
+    width, _, rgb = shot
+    x0, y0, x1, y1 = box
+    out = []
+    for y in range(y0, y1):
+        row = rgb[(y * width + x0) * 3:(y * width + x1) * 3]
+        for i in range(x1 - x0):
+            out.append((x0 + i, y, (row[3 * i], row[3 * i + 1], row[3 * i + 2])))
+    return out
+
+
+def differing(a, b, box=VIEW):
+    """How many pixels of `box` differ between two shots."""
+    width = a[0]
+    x0, y0, x1, y1 = box
+    n = 0
+    for y in range(y0, y1):
+        ra = a[2][(y * width + x0) * 3:(y * width + x1) * 3]
+        rb = b[2][(y * width + x0) * 3:(y * width + x1) * 3]
+        if ra != rb:
+            n += sum(1 for i in range(0, len(ra), 3) if ra[i:i + 3] != rb[i:i + 3])
+    return n
+
+
+def is_mesh(c):
+    """A lit surface pixel: bright and grey (gizmos are saturated, the backdrop dark)."""
+    r, g, b = c
+    return min(r, g, b) > 150 and max(r, g, b) - min(r, g, b) < 30
+
+
+def mesh_outline_change(a, b, box=VIEW):
+    """How many pixels of `box` are surface in one shot and not in the other."""
+    pa, pb = pixels(a, box), pixels(b, box)
+    return sum(1 for (_, _, ca), (_, _, cb) in zip(pa, pb) if is_mesh(ca) != is_mesh(cb))
+
+
+def blobs(shot, colour, tolerance=6, box=VIEW):
+    """Connected groups of pixels of `colour` (±tolerance per channel), largest first, each
+    as (count, centre x, centre y)."""
+    hits = {(x, y) for x, y, c in pixels(shot, box)
+            if all(abs(c[i] - colour[i]) <= tolerance for i in range(3))}
+    out = []
+    while hits:
+        stack = [hits.pop()]
+        group = []
+        while stack:
+            x, y = stack.pop()
+            group.append((x, y))
+            for n in ((x + 1, y), (x - 1, y), (x, y + 1), (x, y - 1)):
+                if n in hits:
+                    hits.remove(n)
+                    stack.append(n)
+        out.append((len(group), sum(p[0] for p in group) / len(group),
+                    sum(p[1] for p in group) / len(group)))
+    return sorted(out, reverse=True)
+
+
+HANDLE = (255, 140, 25)  # An unselected handle of the selected node.
+ACTIVE = (255, 242, 76)  # A selected handle.
+
+
+def handles(shot, colour=HANDLE, min_pixels=40):
+    return [b for b in blobs(shot, colour) if b[0] >= min_pixels]
+
+
+def expect(condition, message):
+    if not condition:
+        raise Failed(message)
+
+
+def undo_check(studio, reference, name, what):
+    """One Ctrl+Z must bring the view back to `reference`, pixel for pixel; then redo."""
+    done = studio.shot(f"{name}-done-again", settle=0.5)
+    studio.key("ctrl+z")
+    undone = studio.shot(f"{name}-undone")
+    n = differing(reference, undone)
+    expect(n == 0, f"after one Ctrl+Z {what}, the 3-D view differs from before it in {n} "
+                   f"pixels")
+    studio.key("ctrl+shift+z")
+    redone = studio.shot(f"{name}-redone")
+    n = differing(done, redone)
+    expect(n == 0, f"after Ctrl+Shift+Z {what}, the 3-D view differs from after it in {n} "
+                   f"pixels")
+    return redone
+
+
+def story_head(studio):
+    start = studio.shot("1-start", settle=20.0)
+    cursor = (600, 245)
+    studio.xdo("mousemove", *cursor)
+    time.sleep(0.5)
+    studio.key("shift+a")
+    menu = studio.shot("2-shift-a")
+    expect(differing(start, menu, (cursor[0], cursor[1], 835, 700)) > 5000,
+           "Shift+A over the head opened no menu at the cursor")
+    studio.click(cursor[0] + POPUP_FFSD[0], cursor[1] + POPUP_FFSD[1])
+    added = studio.shot("3-ffsd-point-added")
+    expect(mesh_outline_change(start, added) > 100,
+           "adding an FFSD control point did not change the head")
+    found = handles(added)
+    expect(found, "the new control point shows no handle")
+    _, hx, hy = found[0]
+    expect(abs(hx - cursor[0]) < 30 and abs(hy - cursor[1]) < 45,
+           f"the new point's handle is at ({hx:.0f}, {hy:.0f}), not at the surface under the "
+           f"cursor {cursor}")
+    undo_check(studio, start, "3-ffsd-point-added", "of the added point")
+
+    studio.click(round(hx), round(hy))
+    picked = studio.shot("4-handle-selected")
+    expect(handles(picked, ACTIVE), "a click on the handle did not select it")
+    studio.drag([(round(hx), round(hy)), (round(hx), round(hy) - 25)])
+    dragged = studio.shot("5-point-dragged")
+    expect(mesh_outline_change(picked, dragged) > 100,
+           "dragging the control point's handle did not change the head")
+    undo_check(studio, picked, "5-point-dragged", "of the drag")
+
+
+def story_spot(studio):
+    start = studio.shot("1-start", settle=15.0)
+    studio.click(*ADD_MENU)
+    menu = studio.shot("2-add-menu", settle=1.0)
+    expect(differing(start, menu, (75, 20, 300, 480)) > 5000, "the Add menu did not open")
+    studio.click(*MENU["Lattice (Bernstein)"])
+    added = studio.shot("3-lattice-added")
+    found = handles(added)
+    # 27 control points, some in front of others: at least a dozen separate handles show.
+    expect(len(found) >= 12, f"the new 3x3x3 lattice shows {len(found)} separate handles")
+    undo_check(studio, start, "3-lattice-added", "of the added lattice")
+
+    # The top front corner (nearest the top left of the view), dragged up and to the left.
+    _, hx, hy = min(found, key=lambda b: b[1] + b[2])
+    studio.click(round(hx), round(hy))
+    picked = studio.shot("4-point-selected")
+    expect(handles(picked, ACTIVE), "a click on the control point did not select it")
+    studio.drag([(round(hx), round(hy)), (round(hx) - 60, round(hy) - 50)])
+    dragged = studio.shot("5-point-dragged")
+    expect(mesh_outline_change(picked, dragged) > 300,
+           "dragging a lattice control point did not deform the cow")
+    undo_check(studio, picked, "5-point-dragged", "of the control point drag")
+
+    studio.click(*ADD_MENU)
+    studio.click(*MENU["Sphere volume"])
+    masked = studio.shot("6-sphere-masks-the-layer")
+    expect(mesh_outline_change(dragged, masked) > 100,
+           "a new sphere volume on the selected layer did not change the deformation")
+    undo_check(studio, dragged, "6-sphere-masks-the-layer", "of the added volume")
+
+
+def story_sketch(studio):
+    start = studio.shot("1-start", settle=15.0)
+    studio.click(*ADD_MENU)
+    studio.click(*MENU["Sketch bend"])
+    mode = studio.shot("2-sketch-mode", settle=1.0)
+    expect(differing(start, mode) > 0, "sketch mode shows no hint in the view")
+    # The reference stroke: down the upper arm from the armpit's height, past the elbow, to
+    # the wrist (a stroke starting on the shoulder would cut through the chest).
+    reference = [(694, 240), (705, 258), (716, 276), (731, 300), (746, 323)]
+    studio.drag(reference, steps=6)
+    roi = studio.shot("3-reference-stroke", settle=3.0)
+    ramp = sum(1 for _, _, (r, g, b) in pixels(roi) if b > 150 and r < 120 and g < 160)
+    expect(ramp > 100, "no region of interest (blue end of the s(v) ramp) after the "
+                       "reference stroke")
+    # The rigid part's orange, lit: red high, blue well below it.
+    rigid = sum(1 for _, _, (r, g, b) in pixels(roi) if r > 230 and g > 140 and r - b > 80)
+    expect(rigid > 50, "the hand beyond the stroke is not shown as a rigid part")
+    # The target stroke: the same upper arm, the forearm turned up and out at the elbow.
+    target = [(694, 240), (705, 258), (716, 276), (743, 272), (771, 268)]
+    studio.drag(target, steps=6)
+    bent = studio.shot("4-arm-bent", settle=4.0)
+    moved = sum(1 for _, _, c in pixels(bent, (745, 245, 800, 275)) if is_mesh(c))
+    expect(moved > 300, "the target stroke did not bend the forearm where it was drawn")
+    undo_check(studio, start, "4-arm-bent", "of the sketch")
+
+
+STORIES = [
+    ("head", [], story_head),
+    ("spot", ["--scene", "scenes/spot.ron"], story_spot),
+    ("sketch", ["--scene", "scenes/makehuman-body.ron"], story_sketch),
+]
+
+
+def main():
+    if len(sys.argv) < 3:
+        sys.exit(__doc__)
+    binary, out_dir = os.path.abspath(sys.argv[1]), sys.argv[2]
+    only = set(sys.argv[3:])
+    os.makedirs(out_dir, exist_ok=True)
+    failures = []
+    for i, (name, args, story) in enumerate(STORIES):
+        if only and name not in only:
+            continue
+        studio = None
+        try:
+            studio = Studio(binary, out_dir, name, ":%d" % (40 + i), args)
+            story(studio)
+            print(f"ok: {name}")
+        except Failed as e:
+            print(f"FAILED: {name}: {e}")
+            failures.append(name)
+        finally:
+            if studio is not None:
+                studio.close()
+    if failures:
+        sys.exit(f"{len(failures)} of the stories failed: {', '.join(failures)} "
+                 f"(screenshots in {out_dir})")
+    print(f"ok: every story passed (screenshots in {out_dir})")
+
+
+if __name__ == "__main__":
+    main()
