@@ -16,13 +16,14 @@
 //! keeps its position exactly where `d ≥ r`.
 
 use glam::{Affine3A, Mat3, Quat, Vec3};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::curve::{CurveBasis, CurveEvaluator, validate_polygon};
 use crate::error::{CoreError, Result, check_finite};
 use crate::frames::{Frame, PolylineIndex, double_reflection, polyline_tangents};
 use crate::influence::Falloff;
-use crate::tool::{BindInput, Deformer, uniform_scale};
+use crate::tool::{BIND_CHUNK, BindInput, Deformer, active_mask, uniform_scale};
 
 /// Samples per control point of a spline axis.
 const SAMPLES_PER_POINT: usize = 16;
@@ -344,23 +345,36 @@ impl Deformer for AxialTool {
                 problem: "fewer than 2 samples".to_owned(),
             })?;
         let inv_r = 1.0 / self.radius;
-        for &i in input.active {
-            let u = input.positions[i as usize];
-            let (j, f, d2) = index.closest(u);
-            let w = self.falloff.weight(d2.sqrt() * inv_r, self.inner);
-            if w <= 0.0 {
-                continue;
-            }
-            let (a, m) = bind.rest.at(j, f);
-            // M = R W S is a rotation times diag(1, s, s) with s > 0: M⁻¹ = S⁻¹ (R W)ᵀ.
-            let local = m.inverse() * (u - a);
-            let k = i as usize;
-            bind.segment[k] = j as u32;
-            bind.fraction[k] = f;
-            bind.local[k] = local;
-            bind.base[k] = a + m * local;
-            bind.weight[k] = w;
-        }
+        // Every vertex on its own, in parallel chunks (the same bits as one by one).
+        let mask = active_mask(n, input.active);
+        let rest = &bind.rest;
+        bind.segment
+            .par_iter_mut()
+            .zip(bind.fraction.par_iter_mut())
+            .zip(bind.local.par_iter_mut())
+            .zip(bind.base.par_iter_mut())
+            .zip(bind.weight.par_iter_mut())
+            .enumerate()
+            .with_min_len(BIND_CHUNK)
+            .for_each(|(k, ((((segment, fraction), local), base), weight))| {
+                if !mask[k] {
+                    return;
+                }
+                let u = input.positions[k];
+                let (j, f, d2) = index.closest(u);
+                let w = self.falloff.weight(d2.sqrt() * inv_r, self.inner);
+                if w <= 0.0 {
+                    return;
+                }
+                let (a, m) = rest.at(j, f);
+                // M = R W S is a rotation times diag(1, s, s) with s > 0: M⁻¹ = S⁻¹ (R W)ᵀ.
+                let l = m.inverse() * (u - a);
+                *segment = j as u32;
+                *fraction = f;
+                *local = l;
+                *base = a + m * l;
+                *weight = w;
+            });
         Ok(bind)
     }
 

@@ -22,12 +22,13 @@
 //! when `Q = P` and exactly `x` wherever no moved control point has a non-zero basis function.
 
 use glam::{Affine3A, Mat3, Quat, Vec3};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all, bernstein_all_with_derivative};
 use crate::error::{CoreError, Result, check_finite_vec3};
 use crate::frames::PolylineIndex;
-use crate::tool::{BindInput, Deformer};
+use crate::tool::{BIND_CHUNK, BindInput, Deformer, active_mask};
 
 /// Largest number of control points a Bézier polygon may have (degree [`MAX_DEGREE`]).
 pub const MAX_BEZIER_POINTS: usize = MAX_DEGREE + 1;
@@ -244,18 +245,20 @@ impl CurveEvaluator {
         let (s, f, _) = samples.closest(x);
         let step = 1.0 / (samples.points().len() - 1) as f32;
         let mut t = ((s as f32 + f) * step).clamp(0.0, 1.0);
-        let mut best = self.point(ctrl, t).distance_squared(x);
+        // One basis evaluation per step: the point and derivative at the accepted parameter
+        // serve the next step.
+        let (mut c, mut dc) = self.point_and_derivative(ctrl, t);
+        let mut best = c.distance_squared(x);
         for _ in 0..REFINE_STEPS {
-            let (c, dc) = (self.point(ctrl, t), self.derivative(ctrl, t));
             let l2 = dc.length_squared();
             if l2 <= f32::EPSILON * f32::EPSILON {
                 break;
             }
             let next = (t - (c - x).dot(dc) / l2).clamp(0.0, 1.0);
-            let d = self.point(ctrl, next).distance_squared(x);
+            let (cn, dn) = self.point_and_derivative(ctrl, next);
+            let d = cn.distance_squared(x);
             if d < best {
-                best = d;
-                t = next;
+                (best, t, c, dc) = (d, next, cn, dn);
             } else {
                 break;
             }
@@ -392,17 +395,28 @@ impl Deformer for CurveTool {
         let mut offsets = vec![Vec3::ZERO; n];
         let mut firsts = vec![(0, 0); n];
         let mut weights = vec![0.0; n * stride];
-        for &i in input.active {
-            let k = i as usize;
-            let x = input.positions[k];
-            let (t, _) = evaluator.closest_parameter(&self.rest, &samples, x);
-            params[k] = t;
-            offsets[k] = x - evaluator.point(&self.rest, t);
-            let (w, m) = (evaluator.point_weights(t), evaluator.segment_weights(t));
-            firsts[k] = (w.first as u32, m.first as u32);
-            weights[k * stride..k * stride + p + 1].copy_from_slice(&w.values[..=p]);
-            weights[k * stride + p + 1..(k + 1) * stride].copy_from_slice(&m.values[..p]);
-        }
+        // Every vertex on its own, in parallel chunks (the same bits as one by one).
+        let mask = active_mask(n, input.active);
+        params
+            .par_iter_mut()
+            .zip(offsets.par_iter_mut())
+            .zip(firsts.par_iter_mut())
+            .zip(weights.par_chunks_mut(stride))
+            .enumerate()
+            .with_min_len(BIND_CHUNK)
+            .for_each(|(k, (((param, offset), first), weights))| {
+                if !mask[k] {
+                    return;
+                }
+                let x = input.positions[k];
+                let (t, _) = evaluator.closest_parameter(&self.rest, &samples, x);
+                *param = t;
+                *offset = x - evaluator.point(&self.rest, t);
+                let (w, m) = (evaluator.point_weights(t), evaluator.segment_weights(t));
+                *first = (w.first as u32, m.first as u32);
+                weights[..=p].copy_from_slice(&w.values[..=p]);
+                weights[p + 1..].copy_from_slice(&m.values[..p]);
+            });
         Ok(CurveBind {
             evaluator,
             params,

@@ -15,11 +15,12 @@
 //! `docs/algorithms/shape-surface.md` gives the details.
 
 use glam::{Affine3A, Vec3};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE};
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
-use crate::tool::{BindInput, Deformer};
+use crate::tool::{BIND_CHUNK, BindInput, Deformer};
 
 /// The rest plane of a shape surface: `origin + a·u_edge + b·v_edge`, `(a, b) ∈ [0, 1]²`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -216,6 +217,10 @@ struct Bound {
     u3: f32,
     /// Rest unit normal `N(u₁, u₂)`.
     normal: Vec3,
+    /// The rest surface's partial derivatives `S_u`, `S_v` at `(u₁, u₂)` (the very values
+    /// deform would compute again).
+    du: Vec3,
+    dv: Vec3,
 }
 
 /// Bind of a [`ShapeSurfaceTool`]: `(u₁, u₂, u₃)` per active vertex.
@@ -346,39 +351,68 @@ impl Deformer for ShapeSurfaceTool {
         let (rest, _, _) = self.nets(&knots);
         let n_u = self.counts.0 as usize;
         let (pu, pv) = (knots[0].degree(), knots[1].degree());
-        // Seeds: a grid of surface samples, four per knot span.
+        let planar = self.rest.is_empty();
+        // Seeds of the search on a curved rest surface: a grid of surface samples, four per
+        // knot span.
         let gu = (4 * (knots[0].count() - pu) + 1).min(129);
         let gv = (4 * (knots[1].count() - pv) + 1).min(129);
-        let mut samples = Vec::with_capacity(gu * gv);
-        for j in 0..gv {
+        let mut samples = Vec::with_capacity(if planar { 0 } else { gu * gv });
+        for j in 0..if planar { 0 } else { gv } {
             for i in 0..gu {
                 let (u, v) = (i as f32 / (gu - 1) as f32, j as f32 / (gv - 1) as f32);
                 samples.push((u, v, eval_net(&rest, n_u, pu, pv, &bases(&knots, u, v))[0]));
             }
         }
         let size = self.frame.u_edge.length() + self.frame.v_edge.length();
-        let mut slot = vec![u32::MAX; input.positions.len()];
-        let mut points = Vec::with_capacity(input.active.len());
-        for &i in input.active {
-            let x = input.positions[i as usize];
-            let (u, v, s) = closest_point(&knots, &rest, &samples, x);
+        // A rest surface without rest edits is the frame's plane, `S(u, v) = O + u·U + v·V`
+        // exactly (B-splines reproduce linear functions from the Greville abscissae): its
+        // closest point solves the 2×2 normal equations directly instead of a search.
+        let (o, eu, ev) = (self.frame.origin, self.frame.u_edge, self.frame.v_edge);
+        let (a, b, c) = (eu.dot(eu), eu.dot(ev), ev.dot(ev));
+        let det = a * c - b * b;
+        let project = |x: Vec3| -> Option<Bound> {
+            let (u, v, s) = if planar && det > 0.0 {
+                let r = x - o;
+                let (g1, g2) = (r.dot(eu), r.dot(ev));
+                let u = ((c * g1 - b * g2) / det).clamp(0.0, 1.0);
+                let v = ((a * g2 - b * g1) / det).clamp(0.0, 1.0);
+                (u, v, eval_net(&rest, n_u, pu, pv, &bases(&knots, u, v)))
+            } else {
+                closest_point(&knots, &rest, &samples, x)
+            };
             let n = s[1].cross(s[2]);
             if n.length_squared().is_nan() || n.length_squared() <= 0.0 {
-                continue;
+                return None;
             }
             let n = n.normalize();
             let r = x - s[0];
             let u3 = r.dot(n);
             // Projects along the normal: the residual is (nearly) normal to the surface.
             if (r - n * u3).length() > 1e-4 * size {
-                continue;
+                return None;
             }
-            slot[i as usize] = points.len() as u32;
-            points.push(Bound {
+            Some(Bound {
                 uv: (u, v),
                 u3,
                 normal: n,
-            });
+                du: s[1],
+                dv: s[2],
+            })
+        };
+        // Every vertex on its own, in parallel chunks, then compacted in order.
+        let bound: Vec<Option<Bound>> = input
+            .active
+            .par_iter()
+            .with_min_len(BIND_CHUNK)
+            .map(|&i| project(input.positions[i as usize]))
+            .collect();
+        let mut slot = vec![u32::MAX; input.positions.len()];
+        let mut points = Vec::with_capacity(input.active.len());
+        for (&i, b) in input.active.iter().zip(bound) {
+            if let Some(b) = b {
+                slot[i as usize] = points.len() as u32;
+                points.push(b);
+            }
         }
         Ok(SurfaceBind {
             knots,
@@ -405,12 +439,9 @@ impl Deformer for ShapeSurfaceTool {
             };
             let bs = bases(&bind.knots, b.uv.0, b.uv.1);
             let d = eval_net(&delta, n_u, pu, pv, &bs);
-            let s_rest = eval_net(&bind.rest, n_u, pu, pv, &bs);
-            let n_rest = s_rest[1].cross(s_rest[2]).normalize_or(b.normal);
+            let n_rest = b.du.cross(b.dv).normalize_or(b.normal);
             // A collapsed moved surface keeps the rest normal there.
-            let n_new = (s_rest[1] + d[1])
-                .cross(s_rest[2] + d[2])
-                .normalize_or(n_rest);
+            let n_new = (b.du + d[1]).cross(b.dv + d[2]).normalize_or(n_rest);
             // H_z = 1 + Σ (h_ij − 1) Nᵢ Nⱼ (partition of unity), exactly 1 at rest.
             let mut h = 1.0;
             for j in 0..=pv {

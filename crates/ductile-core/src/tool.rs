@@ -37,6 +37,22 @@ pub struct BindInput<'a> {
     pub active: &'a [u32],
 }
 
+/// Vertices per parallel task when a tool binds every vertex on its own (curves, axes,
+/// shape surfaces).
+pub(crate) const BIND_CHUNK: usize = 4096;
+
+/// `mask[v]` is true for the active vertices of `n`.
+#[must_use]
+pub(crate) fn active_mask(n: usize, active: &[u32]) -> Vec<bool> {
+    let mut mask = vec![false; n];
+    for &i in active {
+        if let Some(m) = mask.get_mut(i as usize) {
+            *m = true;
+        }
+    }
+    mask
+}
+
 /// A deformation tool: the bind / deform protocol described in the module documentation.
 pub trait Deformer {
     /// Cached data computed by [`Deformer::bind`].
@@ -121,14 +137,29 @@ impl Tool {
         }
     }
 
-    /// True when the tool is exactly the identity map whatever the mesh (an FFSD tool whose
-    /// every effective γ is 0, such as a macro at value 0), so the stack may skip it.
+    /// True when the tool is exactly the identity map whatever the mesh, bit for bit, so the
+    /// stack may skip it (and need not bind it): an FFSD tool whose every effective γ is 0
+    /// (a macro at value 0); a non-rational lattice with no moved control point
+    /// (`x + Σ B·0`); a curve or an axis whose deformed state equals its rest state (their
+    /// displacement forms give exactly 0 there); a shape surface with no move and every
+    /// height 1 (its displacement form is exactly 0 too). A tool just added in the Studio is
+    /// in one of these states, so adding it costs no evaluation. Other tools are never
+    /// skipped (their identity would hold only up to rounding).
     #[must_use]
     pub fn is_identity(&self) -> bool {
         match self {
             Tool::Ffsd(t) => t.gain == 0.0 || t.points.iter().all(|p| p.gamma == 0.0),
-            #[allow(unreachable_patterns)]
-            _ => false,
+            Tool::Lattice(t) => t
+                .points
+                .iter()
+                .all(|e| e.offset == Vec3::ZERO && e.weight == 1.0),
+            Tool::Curve(t) => t.rest == t.deformed,
+            Tool::Axial(t) => t.rest == t.deformed,
+            Tool::ShapeSurface(t) => {
+                t.moves.iter().all(|e| e.offset == Vec3::ZERO)
+                    && t.heights.iter().all(|h| h.height == 1.0)
+            }
+            Tool::Sketch(_) | Tool::Dogme(_) | Tool::DirectFfd(_) => false,
         }
     }
 
@@ -263,4 +294,97 @@ impl Tool {
 #[must_use]
 pub fn uniform_scale(m: &Affine3A) -> f32 {
     m.matrix3.determinant().abs().cbrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::axial::{AxialTool, AxisPoint, AxisShape};
+    use crate::curve::{CurveBasis, CurveTool};
+    use crate::lattice::{LatticeBasis, LatticeFrame, LatticeTool};
+    use crate::mesh::RestMesh;
+    use crate::surface::{ShapeSurfaceTool, SurfaceFrame};
+
+    /// The tools `is_identity` skips really are the identity, bit for bit, when bound and
+    /// deformed anyway (a bumpy sheet crossing each tool's region).
+    #[test]
+    fn tools_at_rest_deform_nothing_bit_for_bit() {
+        let mesh = crate::primitives::grid(40, 40, false, |r, c| {
+            let (x, y) = (r as f32 / 13.0 - 1.5, c as f32 / 11.0 - 1.8);
+            Vec3::new(x, y, 0.3 * (x * 3.1).sin() * (y * 2.3).cos() + 0.05)
+        });
+        let rest = RestMesh::new(mesh, "sheet").unwrap();
+        let positions = rest.welded_positions();
+        let active: Vec<u32> = (0..positions.len() as u32).collect();
+        let axis = |n: usize| -> Vec<Vec3> {
+            (0..n)
+                .map(|i| Vec3::new(-1.2 + 2.4 * i as f32 / (n - 1) as f32, 0.1 * i as f32, 0.05))
+                .collect()
+        };
+        let points: Vec<AxisPoint> = axis(5)
+            .into_iter()
+            .map(|position| AxisPoint {
+                position,
+                twist: 0.0,
+                scale: 1.0,
+            })
+            .collect();
+        let frame = LatticeFrame {
+            origin: Vec3::new(-1.0, -1.0, -0.5),
+            s: Vec3::new(2.0, 0.2, 0.0),
+            t: Vec3::new(-0.1, 2.0, 0.0),
+            u: Vec3::new(0.0, 0.0, 1.0),
+        };
+        let mut bspline = LatticeTool::bernstein(frame, (4, 5, 4));
+        bspline.basis = LatticeBasis::BSpline { degree: (2, 2, 2) };
+        bspline.falloff = 0.3;
+        let mut axial_spline = AxialTool::new(points.clone(), 0.8);
+        axial_spline.shape = AxisShape::BSpline { degree: 3 };
+        let surface = ShapeSurfaceTool::planar(
+            SurfaceFrame {
+                origin: Vec3::new(-1.0, -1.0, 0.0),
+                u_edge: Vec3::new(2.0, 0.0, 0.1),
+                v_edge: Vec3::new(0.0, 2.0, 0.0),
+            },
+            (5, 4),
+        );
+        let tools = [
+            Tool::Lattice(LatticeTool::bernstein(frame, (3, 3, 3))),
+            Tool::Lattice(bspline),
+            Tool::Curve(CurveTool {
+                basis: CurveBasis::Bezier,
+                rest: axis(5),
+                deformed: axis(5),
+            }),
+            Tool::Curve(CurveTool {
+                basis: CurveBasis::BSpline { degree: 3 },
+                rest: axis(6),
+                deformed: axis(6),
+            }),
+            Tool::Axial(AxialTool::new(points, 0.8)),
+            Tool::Axial(axial_spline),
+            Tool::ShapeSurface(surface),
+        ];
+        for tool in tools {
+            assert!(tool.is_identity(), "{}", tool.kind_name());
+            tool.validate("t").unwrap();
+            let bind = tool
+                .bind(&BindInput {
+                    positions,
+                    topology: rest.topology(),
+                    active: &active,
+                })
+                .unwrap();
+            let mut out = vec![Vec3::ZERO; active.len()];
+            tool.deform(&bind, positions, &active, &mut out);
+            for (k, (o, p)) in out.iter().zip(positions).enumerate() {
+                assert_eq!(
+                    o.to_array().map(f32::to_bits),
+                    p.to_array().map(f32::to_bits),
+                    "{}: vertex {k}",
+                    tool.kind_name()
+                );
+            }
+        }
+    }
 }

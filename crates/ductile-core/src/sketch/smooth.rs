@@ -15,7 +15,8 @@
 //!  = w_c,k u_k + Σ_{j∈N_k∖Ω} w_kj u_j`.
 //!
 //! Its matrix depends only on the bind-time positions, so it is factorised once (sparse
-//! Cholesky, faer, f64) and every re-evaluation is a pair of triangular solves.
+//! Cholesky, faer, f64) and every re-evaluation is a pair of triangular solves (per
+//! parameter column; the columns are solved in parallel).
 
 use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
@@ -162,7 +163,14 @@ impl Smoother {
                 rhs[(k as usize, c)] += w * value[c];
             }
         }
-        self.llt.solve_in_place(rhs.as_mut());
+        // The columns are independent solves with the same factor: on two or more cores
+        // they run side by side (the triangular solves are memory-bound, one thread each).
+        if K >= 2 {
+            let (a, b) = rhs.as_mut().split_at_col_mut(K / 2);
+            rayon::join(|| self.llt.solve_in_place(a), || self.llt.solve_in_place(b));
+        } else {
+            self.llt.solve_in_place(rhs.as_mut());
+        }
         (0..n)
             .map(|k| std::array::from_fn(|c| rhs[(k, c)]))
             .collect()

@@ -16,6 +16,7 @@
 //! Static vertices (neither region of interest nor rigid) keep their input bit for bit.
 
 use glam::{Affine3A, Vec2, Vec3};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
@@ -235,6 +236,9 @@ impl SketchBind {
     }
 }
 
+/// Vertices per parallel task of the per-vertex parts of an evaluation.
+const PAR_CHUNK: usize = 4096;
+
 /// The per-evaluation deformation: the bend or twist with its controls.
 enum Map<'a> {
     Bend {
@@ -375,7 +379,11 @@ impl SketchTool {
 
         // Parameters of the region of interest and of the rigid parts' virtual vertices.
         let mut s_roi = bind.roi_s.clone();
-        let mut theta_roi: Vec<f32> = s_roi.iter().map(|&s| map.theta(s)).collect();
+        let mut theta_roi: Vec<f32> = s_roi
+            .par_iter()
+            .with_min_len(PAR_CHUNK)
+            .map(|&s| map.theta(s))
+            .collect();
         let rigid_params: Vec<[f32; 2]> =
             bind.rigid.iter().map(|r| [r.s, map.theta(r.s)]).collect();
         let outside = |v: u32| -> [f32; 2] {
@@ -406,9 +414,20 @@ impl SketchTool {
         }
 
         let mut out: Vec<Vec3> = active.iter().map(|&i| positions[i as usize]).collect();
-        for k in 0..bind.roi.len() {
-            let v = positions[bind.roi[k] as usize];
-            out[bind.roi_slots[k] as usize] = map.apply(v, s_roi[k], theta_roi[k], true);
+        let mapped: Vec<Vec3> = (0..bind.roi.len())
+            .into_par_iter()
+            .with_min_len(PAR_CHUNK)
+            .map(|k| {
+                map.apply(
+                    positions[bind.roi[k] as usize],
+                    s_roi[k],
+                    theta_roi[k],
+                    true,
+                )
+            })
+            .collect();
+        for (&slot, p) in bind.roi_slots.iter().zip(mapped) {
+            out[slot as usize] = p;
         }
         for (r, p) in bind.rigid.iter().zip(&rigid_params) {
             for (&v, &slot) in r.vertices.iter().zip(&r.slots) {
