@@ -149,52 +149,61 @@ impl KnotVector {
         // Degree p−1 functions N_{s−p+1..=s, p−1} live in lower[1..=p].
         let mut lower = [0.0_f32; 17];
         if p >= 1 {
-            let reduced = KnotVector {
-                degree: p - 1,
-                knots: self.knots[1..self.knots.len() - 1].to_vec(),
-            };
+            // The degree p−1 vector is this one without its end knots; its span s−1 reads
+            // exactly the knots `knots[s+1−j]`, `knots[s+j]` that span s reads here, so the
+            // recurrence runs on these knots with no copy.
             let mut tmp = [0.0_f32; 16];
-            // In the reduced vector the span index shifts by one.
-            let _ = reduced.basis_at_span(t, s - 1, &mut tmp);
+            basis_at_span(&self.knots, p - 1, t, s, &mut tmp);
             lower[1..=p].copy_from_slice(&tmp[..p]);
         }
+        if p == 0 {
+            values[0] = 1.0;
+            derivs[0] = 0.0;
+            return s;
+        }
+        // One more step of the recurrence gives the values from the same degree p−1
+        // functions: N_{i,p} = (t − u_i)/(u_{i+p} − u_i) N_{i,p−1}
+        //                   + (u_{i+p+1} − t)/(u_{i+p+1} − u_{i+1}) N_{i+1,p−1}.
+        let t = t.clamp(0.0, 1.0);
         let pf = p as f32;
         for j in 0..=p {
             let i = s - p + j;
-            let a = {
-                let d = self.knots[i + p] - self.knots[i];
-                if d > 0.0 { pf / d * lower[j] } else { 0.0 }
-            };
-            let b = {
-                let d = self.knots[i + p + 1] - self.knots[i + 1];
-                if d > 0.0 { pf / d * lower[j + 1] } else { 0.0 }
-            };
-            derivs[j] = a - b;
+            let (mut value, mut deriv) = (0.0, 0.0);
+            let d = self.knots[i + p] - self.knots[i];
+            if d > 0.0 {
+                value += (t - self.knots[i]) / d * lower[j];
+                deriv += pf / d * lower[j];
+            }
+            let d = self.knots[i + p + 1] - self.knots[i + 1];
+            if d > 0.0 {
+                value += (self.knots[i + p + 1] - t) / d * lower[j + 1];
+                deriv -= pf / d * lower[j + 1];
+            }
+            values[j] = value;
+            derivs[j] = deriv;
         }
-        self.basis(t, values);
         s
     }
+}
 
-    /// Like [`KnotVector::basis`] but at a given span (used for the reduced-degree vector).
-    fn basis_at_span(&self, t: f32, s: usize, out: &mut [f32]) -> usize {
-        let p = self.degree;
-        let t = t.clamp(0.0, 1.0);
-        let mut left = [0.0_f32; 16];
-        let mut right = [0.0_f32; 16];
-        out[0] = 1.0;
-        for j in 1..=p {
-            left[j] = t - self.knots[s + 1 - j];
-            right[j] = self.knots[s + j] - t;
-            let mut saved = 0.0;
-            for r in 0..j {
-                let denom = right[r + 1] + left[j - r];
-                let tmp = if denom != 0.0 { out[r] / denom } else { 0.0 };
-                out[r] = saved + right[r + 1] * tmp;
-                saved = left[j - r] * tmp;
-            }
-            out[j] = saved;
+/// The Cox–de Boor recurrence (Piegl & Tiller A2.2) for degree `p` at span `s` of `knots`:
+/// writes `N_{s−p..=s, p}(t)` to `out[..=p]`.
+fn basis_at_span(knots: &[f32], p: usize, t: f32, s: usize, out: &mut [f32]) {
+    let t = t.clamp(0.0, 1.0);
+    let mut left = [0.0_f32; 16];
+    let mut right = [0.0_f32; 16];
+    out[0] = 1.0;
+    for j in 1..=p {
+        left[j] = t - knots[s + 1 - j];
+        right[j] = knots[s + j] - t;
+        let mut saved = 0.0;
+        for r in 0..j {
+            let denom = right[r + 1] + left[j - r];
+            let tmp = if denom != 0.0 { out[r] / denom } else { 0.0 };
+            out[r] = saved + right[r + 1] * tmp;
+            saved = left[j - r] * tmp;
         }
-        s
+        out[j] = saved;
     }
 }
 
@@ -290,6 +299,38 @@ mod tests {
                     (d[j] - fd).abs() < 5e-2 * (1.0 + fd.abs()),
                     "t={t} j={j}: {} vs {fd}",
                     d[j]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn values_with_the_derivative_are_the_basis() {
+        for (p, n) in [
+            (1, 2),
+            (1, 5),
+            (2, 3),
+            (2, 7),
+            (3, 4),
+            (3, 9),
+            (5, 6),
+            (5, 12),
+        ] {
+            let kv = KnotVector::clamped_uniform(p, n).unwrap();
+            let (mut v, mut d, mut b) = ([0.0; 16], [0.0; 16], [0.0; 16]);
+            for k in 0..=200 {
+                let t = k as f32 / 200.0;
+                let s = kv.basis_with_derivative(t, &mut v, &mut d);
+                assert_eq!(kv.basis(t, &mut b), s);
+                for j in 0..=p {
+                    assert!((v[j] - b[j]).abs() < 1e-6, "p={p} n={n} t={t} j={j}");
+                }
+                let sum: f32 = v[..=p].iter().sum();
+                assert!((sum - 1.0).abs() < 1e-5);
+                let dsum: f32 = d[..=p].iter().sum();
+                assert!(
+                    dsum.abs() < 1e-3 * (n as f32),
+                    "derivatives of a partition of unity sum to 0"
                 );
             }
         }
