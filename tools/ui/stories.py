@@ -12,8 +12,10 @@ pixel for pixel) before redoing it and going on:
    head changes and the point's handle sits where the cursor was; select the handle and drag
    it up — the head follows; Ctrl+Z undoes the drag.
 2. Spot (`scenes/spot.ron`): Add ▸ Lattice (Bernstein) — a lattice fits the cow; drag its
-   top control point — the cow deforms; Add ▸ Sphere volume — the new volume masks the
-   lattice's layer, so the deformation changes; Ctrl+Z after each.
+   top control point — the cow deforms; B and a rectangle over the lattice's top row —
+   several control points are selected, and dragging one moves them all; Add ▸ Sphere
+   volume — the new volume masks the lattice's layer, so the deformation changes; Ctrl+Z
+   after each.
 3. MakeHuman's body (`scenes/makehuman-body.ron`): Add ▸ Sketch bend, draw the reference stroke down the arm (the region of interest shows in the
    paper's blue-to-red ramp of s(v), the hand beyond it as a rigid part), draw the target
    stroke bent at the elbow — the forearm goes where it was drawn; Ctrl+Z undoes the whole
@@ -259,12 +261,36 @@ def story_spot(studio):
            "dragging a lattice control point did not deform the cow")
     undo_check(studio, picked, "5-point-dragged", "of the control point drag")
 
+    # Box select (B, as in Blender): a rectangle over the lattice's top row selects several
+    # control points; dragging one of them moves them all, as one undo step.
+    top = [b for b in handles(dragged) if b[2] < min(y for _, _, y in handles(dragged)) + 70]
+    expect(len(top) >= 2, f"only {len(top)} control points found near the lattice's top")
+    x0 = min(x for _, x, _ in top) - 15
+    x1 = max(x for _, x, _ in top) + 15
+    y0 = min(y for _, _, y in top) - 15
+    y1 = max(y for _, _, y in top) + 15
+    studio.xdo("mousemove", round((x0 + x1) / 2), round(y1) + 40)
+    studio.key("b")
+    studio.drag([(round(x0), round(y0)), (round(x1), round(y1))])
+    boxed = studio.shot("6-box-selected")
+    chosen = handles(boxed, ACTIVE)
+    expect(len(chosen) >= 2, f"the box selected {len(chosen)} control points, not several")
+    # Selected handles are drawn larger, so a few mesh pixels under them change colour.
+    expect(mesh_outline_change(dragged, boxed) < 100, "box select changed the mesh")
+    _, gx, gy = max(chosen, key=lambda b: b[0])
+    studio.drag([(round(gx), round(gy)), (round(gx), round(gy) - 40)])
+    grouped = studio.shot("7-group-dragged")
+    expect(len(handles(grouped, ACTIVE)) >= 2, "the group drag lost the selection")
+    expect(mesh_outline_change(boxed, grouped) > 300,
+           "dragging the selected control points did not deform the cow")
+    undo_check(studio, boxed, "7-group-dragged", "of the group drag")
+
     studio.click(*ADD_MENU)
     studio.click(*MENU["Sphere volume"])
-    masked = studio.shot("6-sphere-masks-the-layer")
-    expect(mesh_outline_change(dragged, masked) > 100,
+    masked = studio.shot("8-sphere-masks-the-layer")
+    expect(mesh_outline_change(grouped, masked) > 100,
            "a new sphere volume on the selected layer did not change the deformation")
-    undo_check(studio, dragged, "6-sphere-masks-the-layer", "of the added volume")
+    undo_check(studio, grouped, "8-sphere-masks-the-layer", "of the added volume")
 
 
 def story_sketch(studio):

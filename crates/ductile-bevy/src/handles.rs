@@ -59,6 +59,9 @@ pub struct DragState {
     pub active: Option<ActiveDrag>,
     /// The axis constraint; reset when a drag ends.
     pub constraint: AxisConstraint,
+    /// Set by the application while the primary button belongs to another gesture (a box
+    /// selection): a press on a handle then neither selects it nor starts a drag.
+    pub blocked: bool,
 }
 
 /// A handle drag in progress.
@@ -260,19 +263,22 @@ pub fn axis_keys(keys: Option<Res<ButtonInput<KeyCode>>>, mut drag: ResMut<DragS
 }
 
 /// A primary press on a handle selects its node and the handle (with Shift: adds the handle
-/// to the selected ones of that node, or removes it); on a mesh, the mesh.
+/// to the selected ones of that node, or removes it); on a mesh, the mesh. Nothing while
+/// [`DragState::blocked`].
 pub fn select_on_press(
     mut presses: MessageReader<Pointer<Press>>,
     keys: Option<Res<ButtonInput<KeyCode>>>,
     mut selection: ResMut<Selection>,
+    drag: Res<DragState>,
     handles: Query<&HandleMarker>,
     nodes: Query<&crate::components::SceneNode, With<crate::components::MeshNodeMarker>>,
 ) {
     let shift = keys
         .as_ref()
         .is_some_and(|k| k.any_pressed([KeyCode::ShiftLeft, KeyCode::ShiftRight]));
+    let blocked = drag.blocked;
     for press in presses.read() {
-        if press.event.button != PointerButton::Primary {
+        if press.event.button != PointerButton::Primary || blocked {
             continue;
         }
         match (handles.get(press.entity), nodes.get(press.entity)) {
@@ -344,7 +350,7 @@ pub fn drag_handles(
     cameras: Query<(&Camera, &GlobalTransform), With<Camera3d>>,
 ) {
     for start in starts.read() {
-        if start.event.button != PointerButton::Primary {
+        if start.event.button != PointerButton::Primary || state.blocked {
             continue;
         }
         let Ok((marker, at)) = markers.get(start.entity) else {

@@ -105,6 +105,7 @@ pub fn orbit_camera(
     handles: Query<(), With<HandleMarker>>,
     mut orbiting: Local<bool>,
     sketch: Res<crate::sketch::SketchState>,
+    box_select: Res<crate::box_select::BoxSelect>,
     mut cameras: Query<(&mut OrbitCamera, &mut Transform, &Projection)>,
 ) {
     let Ok((mut orbit, mut transform, projection)) = cameras.single_mut() else {
@@ -125,7 +126,11 @@ pub fn orbit_camera(
             h.values()
                 .any(|hits| hits.keys().any(|e| handles.contains(*e)))
         });
-        *orbiting = over.0 && drag.active.is_none() && !on_handle;
+        // A box selection owns the left button from B to its release (the middle and right
+        // buttons still move the view).
+        let boxing = (box_select.armed || box_select.corners.is_some())
+            && buttons.just_pressed(MouseButton::Left);
+        *orbiting = over.0 && drag.active.is_none() && !on_handle && !boxing;
     }
     if !buttons.any_pressed(any_button) {
         *orbiting = false;

@@ -5,6 +5,7 @@
 //! exits (for automated checks, also under `xvfb-run` with software Vulkan).
 
 mod authoring;
+mod box_select;
 mod camera;
 mod files;
 mod panels;

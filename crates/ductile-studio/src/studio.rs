@@ -71,6 +71,7 @@ impl Plugin for StudioPlugin {
         .init_resource::<FileDialogs>()
         .init_resource::<crate::camera::FrameRequest>()
         .init_resource::<crate::sketch::SketchState>()
+        .init_resource::<crate::box_select::BoxSelect>()
         .add_message::<StudioAction>()
         .add_message::<crate::authoring::AddNode>()
         .add_systems(Startup, setup)
@@ -81,6 +82,7 @@ impl Plugin for StudioPlugin {
                 (
                     viewport_shortcuts,
                     shortcuts,
+                    crate::box_select::box_select,
                     run_actions,
                     crate::authoring::add_nodes,
                     crate::sketch::sketch_input,
@@ -212,13 +214,14 @@ fn viewport_shortcuts(
 }
 
 /// Keyboard shortcuts (ignored while a text field has the keyboard). Escape clears the
-/// node selection.
+/// node selection (unless it cancels a sketch or a box selection).
 fn shortcuts(
     keys: Res<ButtonInput<KeyCode>>,
     keyboard: Res<KeyboardToViewport>,
     drag: Res<DragState>,
     mut selection: ResMut<Selection>,
     sketch: Res<crate::sketch::SketchState>,
+    box_select: Res<crate::box_select::BoxSelect>,
     mut actions: MessageWriter<StudioAction>,
 ) {
     if !keyboard.0 {
@@ -227,6 +230,7 @@ fn shortcuts(
     if keys.just_pressed(KeyCode::Escape)
         && drag.active.is_none()
         && !sketch.active()
+        && !box_select.armed
         && selection.node.is_some()
     {
         selection.select(None);

@@ -50,6 +50,7 @@ pub struct UiInputs<'w, 's> {
     project: Res<'w, OpenProject>,
     time: Res<'w, Time>,
     notices: Res<'w, Notices>,
+    box_select: Res<'w, crate::box_select::BoxSelect>,
     evaluations: Query<'w, 's, &'static MeshEvaluation>,
 }
 
@@ -152,24 +153,36 @@ pub fn studio_ui(
                 });
         });
 
-    let right = egui::Panel::right("right-panel")
-        .resizable(true)
-        .default_size(RIGHT_WIDTH)
-        .show(&mut root, |ui| {
-            egui::ScrollArea::horizontal()
-                .id_salt("right-panel-h")
-                .auto_shrink([false, false])
-                .show(ui, |ui| {
-                    ui.heading("Inspector");
-                    egui::ScrollArea::vertical()
-                        .id_salt("inspector")
-                        .max_height(ui.available_height() * 0.6)
-                        .show(ui, |ui| panels.inspector.show(ui, &mut cx));
-                    ui.separator();
-                    ui.heading("Identikit");
-                    panels.macros.show(ui, &mut cx);
-                });
-        });
+    let right =
+        egui::Panel::right("right-panel")
+            .resizable(true)
+            .default_size(RIGHT_WIDTH)
+            .show(&mut root, |ui| {
+                egui::ScrollArea::horizontal()
+                    .id_salt("right-panel-h")
+                    .auto_shrink([false, false])
+                    .show(ui, |ui| {
+                        ui.heading("Inspector");
+                        // Without macro tools the identikit section is one line: the inspector
+                        // takes the height it would have used.
+                        let has_macros =
+                            cx.doc.document().nodes.iter().any(|n| {
+                                matches!(n.kind, ductile_scene::document::NodeKind::Macro(_))
+                            });
+                        let height = if has_macros {
+                            ui.available_height() * 0.6
+                        } else {
+                            (ui.available_height() - 60.0).max(120.0)
+                        };
+                        egui::ScrollArea::vertical()
+                            .id_salt("inspector")
+                            .max_height(height)
+                            .show(ui, |ui| panels.inspector.show(ui, &mut cx));
+                        ui.separator();
+                        ui.heading("Identikit");
+                        panels.macros.show(ui, &mut cx);
+                    });
+            });
 
     if let Some(a) = dialogs.show(&ctx) {
         actions.write(a);
@@ -272,6 +285,43 @@ pub fn studio_ui(
             let at = free.left_top() + egui::vec2(10.0, 10.0);
             let galley = painter.layout(
                 hint,
+                egui::FontId::proportional(14.0),
+                egui::Color32::WHITE,
+                free.width() - 20.0,
+            );
+            painter.rect_filled(
+                egui::Rect::from_min_size(at, galley.size()).expand(5.0),
+                4.0,
+                egui::Color32::from_black_alpha(170),
+            );
+            painter.galley(at, galley, egui::Color32::WHITE);
+        }
+    }
+    // Box select: the hint and the rectangle being drawn.
+    if inputs.box_select.armed || inputs.box_select.corners.is_some() {
+        let painter = ctx
+            .layer_painter(egui::LayerId::new(
+                egui::Order::Foreground,
+                egui::Id::new("box-select-overlay"),
+            ))
+            .with_clip_rect(free);
+        if let Some(r) = inputs.box_select.rect() {
+            let rect = egui::Rect::from_min_max(
+                egui::pos2(r.min.x, r.min.y),
+                egui::pos2(r.max.x, r.max.y),
+            );
+            painter.rect_filled(rect, 0.0, egui::Color32::from_white_alpha(18));
+            painter.rect_stroke(
+                rect,
+                0.0,
+                egui::Stroke::new(1.0, egui::Color32::WHITE),
+                egui::StrokeKind::Inside,
+            );
+        }
+        if let Some(hint) = inputs.box_select.hint() {
+            let at = free.left_top() + egui::vec2(10.0, 10.0);
+            let galley = painter.layout(
+                hint.to_owned(),
                 egui::FontId::proportional(14.0),
                 egui::Color32::WHITE,
                 free.width() - 20.0,

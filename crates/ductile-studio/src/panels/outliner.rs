@@ -81,9 +81,14 @@ impl Outliner {
                 }
             }
         });
-        // Dropping on the scene row makes a node a root.
+        // Dropping on the scene row makes a node a root; it says so while a node is dragged.
+        let dragging = egui::DragAndDrop::has_payload_of_type::<DraggedNode>(ui.ctx());
         let (_, dropped) = ui.dnd_drop_zone::<DraggedNode, ()>(egui::Frame::default(), |ui| {
-            ui.weak("scene (drop here to unparent)");
+            ui.weak(if dragging {
+                "scene (drop here to unparent)"
+            } else {
+                "scene"
+            });
         });
         if let Some(d) = dropped
             && let Ok(op) = Operation::reparent(doc, &d.0, None)
