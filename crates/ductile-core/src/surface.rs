@@ -198,9 +198,57 @@ fn bases(kv: &[KnotVector; 2], u: f32, v: f32) -> Bases {
 
 /// `(S, S_u, S_v)` of a control net at bases `b`.
 fn eval_net(net: &[Vec3], n_u: usize, pu: usize, pv: usize, b: &Bases) -> [Vec3; 3] {
+    eval_weights(net, n_u, b.weights(pu, pv))
+}
+
+/// The non-zero basis values and derivatives at one `(u, v)`, borrowed: from a [`Bases`] or
+/// from the ones a [`SurfaceBind`] keeps per bound point.
+#[derive(Debug, Clone, Copy)]
+struct Weights<'a> {
+    nu: &'a [f32],
+    du: &'a [f32],
+    nv: &'a [f32],
+    dv: &'a [f32],
+    su: usize,
+    sv: usize,
+}
+
+impl Bases {
+    fn weights(&self, pu: usize, pv: usize) -> Weights<'_> {
+        Weights {
+            nu: &self.nu[..=pu],
+            du: &self.du[..=pu],
+            nv: &self.nv[..=pv],
+            dv: &self.dv[..=pv],
+            su: self.su,
+            sv: self.sv,
+        }
+    }
+}
+
+/// `(S, S_u, S_v)` of a sparse net given as its non-zero entries `(i, j, P_ij)` in
+/// increasing `i + n_u·j` order: the same sums as [`eval_weights`] over the full net, in
+/// the same order, without the zero terms (so the same bits).
+fn eval_sparse(entries: &[(usize, usize, Vec3)], b: Weights<'_>) -> [Vec3; 3] {
     let mut r = [Vec3::ZERO; 3];
-    for j in 0..=pv {
-        for i in 0..=pu {
+    for &(ci, cj, p) in entries {
+        let (Some(i), Some(j)) = (ci.checked_sub(b.su), cj.checked_sub(b.sv)) else {
+            continue;
+        };
+        if i < b.nu.len() && j < b.nv.len() {
+            r[0] += p * (b.nu[i] * b.nv[j]);
+            r[1] += p * (b.du[i] * b.nv[j]);
+            r[2] += p * (b.nu[i] * b.dv[j]);
+        }
+    }
+    r
+}
+
+/// `(S, S_u, S_v)` of a control net: `Σᵢⱼ P_ij (NᵢNⱼ, N'ᵢNⱼ, NᵢN'ⱼ)`.
+fn eval_weights(net: &[Vec3], n_u: usize, b: Weights<'_>) -> [Vec3; 3] {
+    let mut r = [Vec3::ZERO; 3];
+    for j in 0..b.nv.len() {
+        for i in 0..b.nu.len() {
             let p = net[b.su + i + n_u * (b.sv + j)];
             r[0] += p * (b.nu[i] * b.nv[j]);
             r[1] += p * (b.du[i] * b.nv[j]);
@@ -209,6 +257,9 @@ fn eval_net(net: &[Vec3], n_u: usize, pu: usize, pv: usize, b: &Bases) -> [Vec3;
     }
     r
 }
+
+/// The bound points of a chunk of vertices (vertex, bound point) and their basis weights.
+type BoundChunk = (Vec<(u32, Bound)>, Vec<f32>);
 
 /// One bound point: its surface coordinates and what deform needs at them.
 #[derive(Debug, Clone, Copy)]
@@ -221,6 +272,8 @@ struct Bound {
     /// deform would compute again).
     du: Vec3,
     dv: Vec3,
+    /// The first non-zero basis function in u and v (the knot spans minus the degrees).
+    span: (u32, u32),
 }
 
 /// Bind of a [`ShapeSurfaceTool`]: `(u₁, u₂, u₃)` per active vertex.
@@ -230,8 +283,32 @@ pub struct SurfaceBind {
     /// Slot of each welded vertex in `points` (`u32::MAX`: not bound or not projecting).
     slot: Vec<u32>,
     points: Vec<Bound>,
+    /// Per bound point, the basis values and derivatives at its `(u₁, u₂)`:
+    /// `Nᵤ, N'ᵤ` (`p_u + 1` each) then `Nᵥ, N'ᵥ` (`p_v + 1` each). Deform reads them instead
+    /// of evaluating the bases again (their divisions were most of its time).
+    weights: Vec<f32>,
     /// The rest net the bind was made on.
     rest: Vec<Vec3>,
+}
+
+impl SurfaceBind {
+    /// The cached basis weights of bound point `k`.
+    fn weights_of(&self, k: usize, b: &Bound) -> Weights<'_> {
+        let (pu, pv) = (self.knots[0].degree(), self.knots[1].degree());
+        let stride = 2 * (pu + 1) + 2 * (pv + 1);
+        let w = &self.weights[k * stride..(k + 1) * stride];
+        let (nu, w) = w.split_at(pu + 1);
+        let (du, w) = w.split_at(pu + 1);
+        let (nv, dv) = w.split_at(pv + 1);
+        Weights {
+            nu,
+            du,
+            nv,
+            dv,
+            su: b.span.0 as usize,
+            sv: b.span.1 as usize,
+        }
+    }
 }
 
 impl SurfaceBind {
@@ -370,15 +447,17 @@ impl Deformer for ShapeSurfaceTool {
         let (o, eu, ev) = (self.frame.origin, self.frame.u_edge, self.frame.v_edge);
         let (a, b, c) = (eu.dot(eu), eu.dot(ev), ev.dot(ev));
         let det = a * c - b * b;
-        let project = |x: Vec3| -> Option<Bound> {
-            let (u, v, s) = if planar && det > 0.0 {
+        let project = |x: Vec3| -> Option<(Bound, Bases)> {
+            let (u, v, s, bs) = if planar && det > 0.0 {
                 let r = x - o;
                 let (g1, g2) = (r.dot(eu), r.dot(ev));
                 let u = ((c * g1 - b * g2) / det).clamp(0.0, 1.0);
                 let v = ((a * g2 - b * g1) / det).clamp(0.0, 1.0);
-                (u, v, eval_net(&rest, n_u, pu, pv, &bases(&knots, u, v)))
+                let bs = bases(&knots, u, v);
+                (u, v, eval_net(&rest, n_u, pu, pv, &bs), bs)
             } else {
-                closest_point(&knots, &rest, &samples, x)
+                let (u, v, s) = closest_point(&knots, &rest, &samples, x);
+                (u, v, s, bases(&knots, u, v))
             };
             let n = s[1].cross(s[2]);
             if n.length_squared().is_nan() || n.length_squared() <= 0.0 {
@@ -391,33 +470,54 @@ impl Deformer for ShapeSurfaceTool {
             if (r - n * u3).length() > 1e-4 * size {
                 return None;
             }
-            Some(Bound {
-                uv: (u, v),
-                u3,
-                normal: n,
-                du: s[1],
-                dv: s[2],
-            })
+            Some((
+                Bound {
+                    uv: (u, v),
+                    u3,
+                    normal: n,
+                    du: s[1],
+                    dv: s[2],
+                    span: (bs.su as u32, bs.sv as u32),
+                },
+                bs,
+            ))
         };
-        // Every vertex on its own, in parallel chunks, then compacted in order.
-        let bound: Vec<Option<Bound>> = input
+        // Chunks of vertices in parallel, each giving its bound points and their weights,
+        // then joined in order.
+        let parts: Vec<BoundChunk> = input
             .active
-            .par_iter()
-            .with_min_len(BIND_CHUNK)
-            .map(|&i| project(input.positions[i as usize]))
+            .par_chunks(BIND_CHUNK)
+            .map(|chunk| {
+                let mut found = Vec::with_capacity(chunk.len());
+                let mut weights = Vec::new();
+                for &i in chunk {
+                    if let Some((b, bs)) = project(input.positions[i as usize]) {
+                        found.push((i, b));
+                        let w = bs.weights(pu, pv);
+                        for part in [w.nu, w.du, w.nv, w.dv] {
+                            weights.extend_from_slice(part);
+                        }
+                    }
+                }
+                (found, weights)
+            })
             .collect();
         let mut slot = vec![u32::MAX; input.positions.len()];
-        let mut points = Vec::with_capacity(input.active.len());
-        for (&i, b) in input.active.iter().zip(bound) {
-            if let Some(b) = b {
+        let total = parts.iter().map(|p| p.0.len()).sum();
+        let mut points = Vec::with_capacity(total);
+        let mut weights = Vec::with_capacity(total * (2 * (pu + 1) + 2 * (pv + 1)));
+        for (found, w) in parts {
+            for (i, b) in found {
                 slot[i as usize] = points.len() as u32;
                 points.push(b);
             }
+            weights.extend(w);
         }
         Ok(SurfaceBind {
             knots,
             slot,
             points,
+            weights,
             rest,
         })
     }
@@ -427,26 +527,43 @@ impl Deformer for ShapeSurfaceTool {
         let n_u = bind.knots[0].count();
         let (pu, pv) = (bind.knots[0].degree(), bind.knots[1].degree());
         let delta: Vec<Vec3> = moved.iter().zip(&bind.rest).map(|(m, r)| *m - *r).collect();
+        // A drag moves a few control points: sum only those when they are fewer than half
+        // of the (p_u + 1)(p_v + 1) a point depends on.
+        let moved_entries: Vec<(usize, usize, Vec3)> = delta
+            .iter()
+            .enumerate()
+            .filter(|(_, d)| **d != Vec3::ZERO)
+            .map(|(k, d)| (k % n_u, k / n_u, *d))
+            .collect();
+        let sparse = 2 * moved_entries.len() < (pu + 1) * (pv + 1);
         for (o, &i) in out.iter_mut().zip(active) {
             let x = positions[i as usize];
-            let Some(b) = bind
+            let Some((k, b)) = bind
                 .slot
                 .get(i as usize)
-                .and_then(|&s| bind.points.get(s as usize))
+                .and_then(|&s| bind.points.get(s as usize).map(|b| (s as usize, b)))
             else {
                 *o = x;
                 continue;
             };
-            let bs = bases(&bind.knots, b.uv.0, b.uv.1);
-            let d = eval_net(&delta, n_u, pu, pv, &bs);
-            let n_rest = b.du.cross(b.dv).normalize_or(b.normal);
+            let bs = bind.weights_of(k, b);
+            let d = if sparse {
+                eval_sparse(&moved_entries, bs)
+            } else {
+                eval_weights(&delta, n_u, bs)
+            };
+            // The rest unit normal `S_u × S_v / |S_u × S_v|`, computed once at bind.
+            let n_rest = b.normal;
             // A collapsed moved surface keeps the rest normal there.
             let n_new = (b.du + d[1]).cross(b.dv + d[2]).normalize_or(n_rest);
             // H_z = 1 + Σ (h_ij − 1) Nᵢ Nⱼ (partition of unity), exactly 1 at rest.
+            // (Skipped when no height is edited: every term is then 0.)
             let mut h = 1.0;
-            for j in 0..=pv {
-                for k in 0..=pu {
-                    h += (heights[bs.su + k + n_u * (bs.sv + j)] - 1.0) * bs.nu[k] * bs.nv[j];
+            if !self.heights.is_empty() {
+                for j in 0..=pv {
+                    for k in 0..=pu {
+                        h += (heights[bs.su + k + n_u * (bs.sv + j)] - 1.0) * bs.nu[k] * bs.nv[j];
+                    }
                 }
             }
             *o = x + d[0] + (n_new * h - n_rest) * b.u3;
@@ -592,6 +709,34 @@ mod tests {
             // D = S' + 2·u₃·N: x, y shift by (0.1, 0), z = 0.3 + 2 z.
             let e = Vec3::new(p.x + 0.1, p.y, 0.3 + 2.0 * p.z);
             assert!((*q - e).length() < 1e-5, "{p}: {q} vs {e}");
+        }
+    }
+
+    #[test]
+    fn sparse_sums_are_the_dense_sums_bit_for_bit() {
+        // Two moved control points of a 6×5 net, degrees (3, 2): at every parameter the
+        // sparse sum over the moved points equals the full sum over the net, bit for bit.
+        let tool = ShapeSurfaceTool {
+            degree: (3, 2),
+            ..ShapeSurfaceTool::planar(frame(), (6, 5))
+        };
+        let knots = tool.knots().unwrap();
+        let mut net = vec![Vec3::ZERO; 30];
+        net[8] = Vec3::new(0.1, -0.3, 0.7); // (2, 1)
+        net[29] = Vec3::new(-0.2, 0.05, 1.1); // (5, 4)
+        let entries = [(2, 1, net[8]), (5, 4, net[29])];
+        for a in 0..=20 {
+            for c in 0..=20 {
+                let b = bases(&knots, a as f32 / 20.0, c as f32 / 20.0);
+                let dense = eval_weights(&net, 6, b.weights(3, 2));
+                let sparse = eval_sparse(&entries, b.weights(3, 2));
+                for k in 0..3 {
+                    assert_eq!(
+                        dense[k].to_array().map(f32::to_bits),
+                        sparse[k].to_array().map(f32::to_bits)
+                    );
+                }
+            }
         }
     }
 
