@@ -209,4 +209,14 @@ fn bench_prints_min_median_max() {
         "0",
     ]);
     assert!(r.is_err());
+    // Issue 14: a thread count no machine has is refused, not attempted.
+    for threads in ["4294967295", "1025", "0"] {
+        let (r, _) = cli(&[
+            "bench",
+            data("tetra.ron").to_str().unwrap(),
+            "--threads",
+            threads,
+        ]);
+        assert!(r.is_err(), "--threads {threads} was accepted");
+    }
 }

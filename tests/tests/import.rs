@@ -88,7 +88,7 @@ fn corrupt_gltf_files_are_errors_not_panics() {
         "",
     );
     assert!(
-        e.contains("invalid glTF: the node hierarchy has a cycle"),
+        e.contains("is reached twice in the node hierarchy (a cycle"),
         "{e}"
     );
     let e = load_corrupted("\"indices\": 2", "\"indices\": 1", "#quad");
@@ -98,7 +98,10 @@ fn corrupt_gltf_files_are_errors_not_panics() {
     );
     let e = load_corrupted("\"count\": 3,", "\"count\": 300,", "");
     assert!(
-        e.contains("glTF mesh 'tri', primitive 0: POSITION cannot be read"),
+        e.contains(
+            "glTF mesh 'tri', primitive 0: attribute Positions: accessor 0 (300 elements of 12 \
+             bytes from offset 0) does not fit in buffer view 0 (36 bytes)"
+        ),
         "{e}"
     );
     let e = load_corrupted("\"version\": \"2.0\"", "\"version\": 2", "");

@@ -23,6 +23,7 @@ pub mod bake;
 pub mod embedded;
 pub mod error;
 pub mod export;
+pub mod gltf_buffers;
 pub mod history_file;
 pub mod mesh;
 pub mod project;

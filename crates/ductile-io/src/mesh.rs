@@ -288,7 +288,7 @@ fn gltf_error(path: &Path) -> impl FnOnce(gltf::Error) -> IoError + '_ {
 
 fn load_gltf(bytes: &[u8], path: &Path, base: Option<&Path>, select: Option<&str>) -> Result<Mesh> {
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(bytes).map_err(gltf_error(path))?;
-    let buffers = gltf::import_buffers(&document, base, blob).map_err(gltf_error(path))?;
+    let buffers = crate::gltf_buffers::load_buffers(&document, base, blob, path)?;
 
     // Mesh instances with their world transforms.
     let mut instances: Vec<(gltf::Mesh<'_>, Mat4)> = Vec::new();
@@ -297,18 +297,21 @@ fn load_gltf(bytes: &[u8], path: &Path, base: Option<&Path>, select: Option<&str
         .or_else(|| document.scenes().next())
     {
         Some(scene) => {
-            let mut stack: Vec<(gltf::Node<'_>, Mat4, usize)> =
-                scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+            let mut stack: Vec<(gltf::Node<'_>, Mat4)> =
+                scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
             stack.reverse();
             // Depth-first, children in order. The gltf crate checks node indices but not
-            // cycles: a path deeper than the node count has one.
-            let node_count = document.nodes().count();
-            while let Some((node, parent, depth)) = stack.pop() {
-                if depth > node_count {
+            // the shape of the hierarchy: glTF requires disjoint trees (2.0 §3.5.3), so a
+            // node reached twice — a cycle, or a node listed twice, whose instances would
+            // multiply at every level — is refused.
+            let mut seen = vec![false; document.nodes().count()];
+            while let Some((node, parent)) = stack.pop() {
+                if std::mem::replace(&mut seen[node.index()], true) {
                     return Err(IoError::GltfStructure {
                         path: path.to_owned(),
                         problem: format!(
-                            "the node hierarchy has a cycle (through node {})",
+                            "node {} is reached twice in the node hierarchy (a cycle, or a \
+                             node with two parents or listed twice); glTF requires trees",
                             node.index()
                         ),
                     });
@@ -317,7 +320,7 @@ fn load_gltf(bytes: &[u8], path: &Path, base: Option<&Path>, select: Option<&str
                 if let Some(mesh) = node.mesh() {
                     instances.push((mesh, world));
                 }
-                let mut children: Vec<_> = node.children().map(|c| (c, world, depth + 1)).collect();
+                let mut children: Vec<_> = node.children().map(|c| (c, world)).collect();
                 children.reverse();
                 stack.extend(children);
             }
@@ -367,8 +370,8 @@ fn load_gltf(bytes: &[u8], path: &Path, base: Option<&Path>, select: Option<&str
                 primitive: k,
                 problem: problem.to_owned(),
             };
-            check_accessors(&prim).map_err(|p| bad(&p))?;
-            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            check_accessors(&prim, &buffers).map_err(|p| bad(&p))?;
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
             let positions: Vec<Vec3> = reader
                 .read_positions()
                 .ok_or_else(|| {
@@ -381,9 +384,10 @@ fn load_gltf(bytes: &[u8], path: &Path, base: Option<&Path>, select: Option<&str
             let uvs: Option<Vec<Vec2>> = reader
                 .read_tex_coords(0)
                 .map(|tc| tc.into_f32().map(Vec2::from).collect());
-            let raw: Vec<u32> = match reader.read_indices() {
-                Some(ix) => ix.into_u32().collect(),
-                None => (0..positions.len() as u32).collect(),
+            let raw: Vec<u32> = match (prim.indices(), reader.read_indices()) {
+                (_, Some(ix)) => ix.into_u32().collect(),
+                (None, None) => (0..positions.len() as u32).collect(),
+                (Some(_), None) => return Err(bad("the indices cannot be read")),
             };
             let mut tris = triangle_list(mode, &raw);
             let (positions, normals) = apply_transform(&world, positions, normals);
@@ -398,10 +402,121 @@ fn load_gltf(bytes: &[u8], path: &Path, base: Option<&Path>, select: Option<&str
     Ok(merger.finish())
 }
 
+/// The most elements an accessor may have (2²⁷, about 134 million): far above a real
+/// mesh's vertex or index count, far below what would exhaust memory.
+pub const MAX_ACCESSOR_ELEMENTS: usize = 1 << 27;
+
+/// Checks that an accessor's data lies where it says, before the gltf crate's reader (which
+/// panics on a stride smaller than the element, and allocates `count` elements for a sparse
+/// accessor) touches it: count within [`MAX_ACCESSOR_ELEMENTS`]; a stride at least the
+/// element size; the accessor inside its view and the view inside its buffer; a sparse
+/// part inside its views, with indices below `count`.
+fn check_layout(a: &gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> std::result::Result<(), String> {
+    let what = format!("accessor {}", a.index());
+    let count = a.count();
+    if count > MAX_ACCESSOR_ELEMENTS {
+        return Err(format!(
+            "{what} has {count} elements, more than the limit of {MAX_ACCESSOR_ELEMENTS}"
+        ));
+    }
+    let view_bytes = |v: &gltf::buffer::View<'_>| -> std::result::Result<usize, String> {
+        let available = buffers.get(v.buffer().index()).map_or(0, Vec::len);
+        match v.offset().checked_add(v.length()) {
+            Some(end) if end <= available => Ok(v.length()),
+            _ => Err(format!(
+                "buffer view {} (offset {}, {} bytes) does not fit in buffer {} ({available} \
+                 bytes)",
+                v.index(),
+                v.offset(),
+                v.length(),
+                v.buffer().index()
+            )),
+        }
+    };
+    let elem = a.size();
+    if let Some(view) = a.view() {
+        let length = view_bytes(&view)?;
+        let stride = view.stride().unwrap_or(elem);
+        if stride < elem {
+            return Err(format!(
+                "{what}: buffer view {} has byteStride {stride}, smaller than one element \
+                 ({elem} bytes)",
+                view.index()
+            ));
+        }
+        let need = match count.checked_sub(1) {
+            None => Some(0),
+            Some(last) => stride
+                .checked_mul(last)
+                .and_then(|n| n.checked_add(elem))
+                .and_then(|n| n.checked_add(a.offset())),
+        };
+        if need.is_none_or(|n| n > length) {
+            return Err(format!(
+                "{what} ({count} elements of {elem} bytes from offset {}) does not fit in \
+                 buffer view {} ({length} bytes)",
+                a.offset(),
+                view.index()
+            ));
+        }
+    }
+    if let Some(sparse) = a.sparse() {
+        let n = sparse.count();
+        if n > count {
+            return Err(format!(
+                "{what} has {n} sparse values but only {count} elements"
+            ));
+        }
+        let indices = sparse.indices();
+        let size = indices.index_type().size();
+        let view = indices.view();
+        let length = view_bytes(&view)?;
+        if indices
+            .offset()
+            .checked_add(n * size)
+            .is_none_or(|e| e > length)
+        {
+            return Err(format!(
+                "{what}: the sparse indices do not fit in their buffer view"
+            ));
+        }
+        let values = sparse.values();
+        let vview = values.view();
+        let vlength = view_bytes(&vview)?;
+        if values
+            .offset()
+            .checked_add(n * elem)
+            .is_none_or(|e| e > vlength)
+        {
+            return Err(format!(
+                "{what}: the sparse values do not fit in their buffer view"
+            ));
+        }
+        let start = view.offset() + indices.offset();
+        let data = &buffers[view.buffer().index()][start..start + n * size];
+        for (k, chunk) in data.chunks_exact(size).enumerate() {
+            let index = chunk
+                .iter()
+                .rev()
+                .fold(0_usize, |acc, &b| (acc << 8) | usize::from(b));
+            if index >= count {
+                return Err(format!(
+                    "{what}: sparse index {k} is {index}, not below the count {count}"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Checks the types of the accessors the importer reads (the gltf crate's reader assumes
 /// them and would panic on others): `POSITION` and `NORMAL` float VEC3, `TEXCOORD_0` VEC2 of
-/// float or normalised unsigned byte/short, indices unsigned SCALAR.
-fn check_accessors(prim: &gltf::Primitive<'_>) -> std::result::Result<(), String> {
+/// float or normalised unsigned byte/short, indices unsigned SCALAR; and their layout
+/// ([`check_layout`]).
+fn check_accessors(
+    prim: &gltf::Primitive<'_>,
+    buffers: &[Vec<u8>],
+) -> std::result::Result<(), String> {
     use gltf::accessor::{DataType, Dimensions};
     use gltf::mesh::Semantic;
     let describe = |a: &gltf::Accessor<'_>| format!("{:?} {:?}", a.data_type(), a.dimensions());
@@ -425,6 +540,12 @@ fn check_accessors(prim: &gltf::Primitive<'_>) -> std::result::Result<(), String
         if a.sparse().is_none() && a.view().is_none() {
             return Err(format!("attribute {semantic:?} has no buffer view"));
         }
+        if matches!(
+            semantic,
+            Semantic::Positions | Semantic::Normals | Semantic::TexCoords(0)
+        ) {
+            check_layout(&a, buffers).map_err(|p| format!("attribute {semantic:?}: {p}"))?;
+        }
     }
     if let Some(a) = prim.indices()
         && (a.dimensions() != Dimensions::Scalar
@@ -434,6 +555,12 @@ fn check_accessors(prim: &gltf::Primitive<'_>) -> std::result::Result<(), String
             "indices have an invalid accessor type ({})",
             describe(&a)
         ));
+    }
+    if let Some(a) = prim.indices() {
+        if a.sparse().is_none() && a.view().is_none() {
+            return Err("the indices have no buffer view".into());
+        }
+        check_layout(&a, buffers).map_err(|p| format!("indices: {p}"))?;
     }
     Ok(())
 }

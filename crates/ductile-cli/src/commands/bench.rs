@@ -7,16 +7,22 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context as _;
 
+/// The most worker threads `--threads` may ask for: more than any machine this runs on has
+/// cores, few enough that starting them cannot exhaust the system.
+pub const MAX_THREADS: i64 = 1024;
+/// The most evaluations per mesh `--iterations` may ask for.
+pub const MAX_ITERATIONS: i64 = 1_000_000;
+
 /// Arguments of `ductile bench`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// The scene file (RON).
     pub scene: PathBuf,
-    /// Evaluations per mesh.
-    #[arg(long, default_value_t = 50, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Evaluations per mesh (1 to 1,000,000).
+    #[arg(long, default_value_t = 50, value_parser = clap::value_parser!(u32).range(1..=MAX_ITERATIONS))]
     pub iterations: u32,
-    /// Worker threads of the rayon pool the evaluation runs in.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Worker threads of the rayon pool the evaluation runs in (1 to 1024).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=MAX_THREADS))]
     pub threads: u32,
 }
 
