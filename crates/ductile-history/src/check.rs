@@ -116,19 +116,13 @@ pub(crate) fn check_transform(what: impl Fn() -> String, t: &Transform) -> Resul
         }
         .into());
     }
-    if t.scale.x == 0.0 || t.scale.y == 0.0 || t.scale.z == 0.0 {
-        return Err(HistoryError::DegenerateTransform {
+    match t.degeneracy() {
+        Some(problem) => Err(HistoryError::DegenerateTransform {
             what: what(),
-            problem: "a scale component is zero",
-        });
+            problem,
+        }),
+        None => Ok(()),
     }
-    if t.rotation.length_squared() == 0.0 {
-        return Err(HistoryError::DegenerateTransform {
-            what: what(),
-            problem: "the rotation quaternion is zero",
-        });
-    }
-    Ok(())
 }
 
 /// A tool's parameters (core's `validate`).
@@ -303,6 +297,14 @@ pub(crate) fn check_layer(
 pub(crate) fn check_new_node(doc: &Document, index: usize, node: &Node) -> Result<()> {
     if node.name.is_empty() {
         return Err(SceneError::EmptyName { index }.into());
+    }
+    if let Some(problem) = ductile_scene::validate::name_problem(&node.name) {
+        return Err(SceneError::BadName {
+            index,
+            name: node.name.clone(),
+            problem,
+        }
+        .into());
     }
     if doc.index_of(&node.name).is_some() {
         return Err(SceneError::DuplicateName {

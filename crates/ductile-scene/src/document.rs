@@ -283,7 +283,7 @@ impl Document {
 
     /// Renames a node and every reference to it (children's parents, layer tools, influence
     /// volumes, its keyframe tracks, its state in every variant). Fails when `old` does not
-    /// exist or `new` is taken or empty.
+    /// exist or `new` is taken, empty, only white space or holds a control character.
     pub fn rename(&mut self, old: &str, new: &str) -> Result<()> {
         if old == new {
             return self.node(old).map(|_| ());
@@ -291,6 +291,13 @@ impl Document {
         if new.is_empty() {
             return Err(SceneError::EmptyName {
                 index: self.index_of(old).unwrap_or(0),
+            });
+        }
+        if let Some(problem) = crate::validate::name_problem(new) {
+            return Err(SceneError::BadName {
+                index: self.index_of(old).unwrap_or(0),
+                name: new.to_owned(),
+                problem,
             });
         }
         if self.index_of(new).is_some() {

@@ -87,6 +87,24 @@ pub enum SceneError {
         /// The missing macro.
         name: String,
     },
+    /// A transform cannot be inverted ([`crate::transform::Transform::degeneracy`]).
+    #[error("{what}: the transform cannot be inverted: {problem}")]
+    DegenerateTransform {
+        /// Whose transform.
+        what: String,
+        /// What is wrong.
+        problem: &'static str,
+    },
+    /// A node name that cannot be shown or typed: only spaces, or a control character.
+    #[error("node {index} has the name {name:?}, which {problem}")]
+    BadName {
+        /// Position of the node in the document.
+        index: usize,
+        /// The name (printed with escapes).
+        name: String,
+        /// What is wrong.
+        problem: &'static str,
+    },
     /// A number is NaN or infinite.
     #[error("{what}: {value} is not a finite number")]
     NotFinite {

@@ -853,6 +853,12 @@ impl MeshEvaluator {
             }
         }
         let mut old: Vec<Option<Stage>> = self.stages.drain(k..).map(Some).collect();
+        // The stages kept below `k` are the same layers, but inert layers inserted or
+        // removed before them move their stack indices (the heat maps look stages up by
+        // index).
+        for (stage, &li) in self.stages.iter_mut().zip(chain) {
+            stage.index = li;
+        }
         let mut next_old = 0;
         let mut evaluated = 0;
         for &li in chain.iter().skip(k) {

@@ -49,4 +49,19 @@ impl Transform {
     pub fn is_finite(&self) -> bool {
         self.translation.is_finite() && self.rotation.is_finite() && self.scale.is_finite()
     }
+
+    /// Why a finite transform cannot be inverted, if it cannot: a zero scale component or a
+    /// zero rotation quaternion (which glam would otherwise treat as a rotation by NaN, and
+    /// a renormalising reader as the identity). Tools are carried into mesh space through
+    /// the inverse of the mesh's world transform, so both are refused everywhere.
+    #[must_use]
+    pub fn degeneracy(&self) -> Option<&'static str> {
+        if self.scale.x == 0.0 || self.scale.y == 0.0 || self.scale.z == 0.0 {
+            Some("a scale component is zero")
+        } else if self.rotation.length_squared() == 0.0 {
+            Some("the rotation quaternion is zero")
+        } else {
+            None
+        }
+    }
 }

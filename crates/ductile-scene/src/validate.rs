@@ -19,6 +19,12 @@ impl Document {
         for (i, n) in self.nodes.iter().enumerate() {
             if n.name.is_empty() {
                 out.push(SceneError::EmptyName { index: i });
+            } else if let Some(problem) = name_problem(&n.name) {
+                out.push(SceneError::BadName {
+                    index: i,
+                    name: n.name.clone(),
+                    problem,
+                });
             } else if !seen.insert(n.name.as_str()) {
                 out.push(SceneError::DuplicateName {
                     name: n.name.clone(),
@@ -42,6 +48,11 @@ impl Document {
                 out.push(SceneError::NotFinite {
                     what: format!("node '{}': transform", n.name),
                     value: format!("{:?}", n.transform),
+                });
+            } else if let Some(problem) = n.transform.degeneracy() {
+                out.push(SceneError::DegenerateTransform {
+                    what: format!("node '{}'", n.name),
+                    problem,
                 });
             }
             match &n.kind {
@@ -91,11 +102,17 @@ impl Document {
         for (area_name, area) in &mesh.areas {
             if let Area::Region(shapes) = area {
                 for (k, s) in shapes.iter().enumerate() {
-                    push_core(
-                        out,
-                        s.shape
-                            .validate(&format!("mesh '{name}', area '{area_name}', shape {k}")),
-                    );
+                    let what = format!("mesh '{name}', area '{area_name}', shape {k}");
+                    push_core(out, s.shape.validate(&what));
+                    // A NaN placement would make the area silently empty.
+                    if !s.transform.is_finite() {
+                        out.push(SceneError::NotFinite {
+                            what: format!("{what}: transform"),
+                            value: format!("{:?}", s.transform),
+                        });
+                    } else if let Some(problem) = s.transform.degeneracy() {
+                        out.push(SceneError::DegenerateTransform { what, problem });
+                    }
                 }
             }
         }
@@ -168,8 +185,81 @@ impl Document {
     }
 }
 
+/// Why a non-empty node name is refused: only white space, or a control character (a
+/// name must be visible in the outliner and safe to print in a terminal).
+#[must_use]
+pub fn name_problem(name: &str) -> Option<&'static str> {
+    if name.trim().is_empty() {
+        Some("is only white space")
+    } else if name.chars().any(char::is_control) {
+        Some("contains a control character")
+    } else {
+        None
+    }
+}
+
 fn push_core(out: &mut Vec<SceneError>, r: Result<(), CoreError>) {
     if let Err(e) = r {
         out.push(SceneError::Core(e));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::document::{Node, NodeKind};
+    use crate::transform::Transform;
+    use glam::{Quat, Vec3};
+
+    fn group(name: &str, transform: Transform) -> Node {
+        Node {
+            name: name.to_owned(),
+            parent: None,
+            transform,
+            kind: NodeKind::Group,
+        }
+    }
+
+    fn problems_of(nodes: Vec<Node>) -> Vec<String> {
+        let doc = Document {
+            nodes,
+            ..Document::default()
+        };
+        doc.problems().iter().map(ToString::to_string).collect()
+    }
+
+    #[test]
+    fn degenerate_transforms_are_problems_as_in_the_history() {
+        let zero_rotation = Transform {
+            rotation: Quat::from_xyzw(0.0, 0.0, 0.0, 0.0),
+            ..Transform::IDENTITY
+        };
+        let zero_scale = Transform {
+            scale: Vec3::new(1.0, 0.0, 1.0),
+            ..Transform::IDENTITY
+        };
+        let p = problems_of(vec![group("a", zero_rotation), group("b", zero_scale)]);
+        assert_eq!(
+            p,
+            vec![
+                "node 'a': the transform cannot be inverted: the rotation quaternion is zero",
+                "node 'b': the transform cannot be inverted: a scale component is zero",
+            ]
+        );
+    }
+
+    #[test]
+    fn blank_and_control_character_names_are_problems() {
+        let p = problems_of(vec![
+            group("  ", Transform::IDENTITY),
+            group("a\u{1b}[31m", Transform::IDENTITY),
+            group("fine name", Transform::IDENTITY),
+        ]);
+        assert_eq!(p.len(), 2, "{p:?}");
+        assert!(p[0].contains("is only white space"), "{p:?}");
+        assert!(
+            p[1].contains(r"\u{1b}") && p[1].contains("control character"),
+            "{p:?}"
+        );
     }
 }

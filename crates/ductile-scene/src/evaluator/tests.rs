@@ -738,3 +738,28 @@ fn a_soloed_layer_evaluates_alone() {
         bits(&alone.evaluate("m", &rest).unwrap())
     );
 }
+
+#[test]
+fn kept_stages_follow_their_layers_when_inert_layers_move() {
+    // Found by `random_edits_match_a_fresh_evaluation`: with `mac` inert (value 0), a layer
+    // inserted at the bottom leaves the first non-inert layer unchanged, so its stage is
+    // kept — but its stack index moved, and the heat maps of the next edit read the stage
+    // of the wrong layer.
+    let rest = rest();
+    let mut doc = scene();
+    let mut ev = MeshEvaluator::new("m", rest.clone());
+    ev.update(&doc).unwrap();
+    for e in [
+        Edit::MacroValue(false, 0.0),
+        Edit::AddLayer(2, 0, false),
+        Edit::MacroValue(false, 0.4240849),
+    ] {
+        e.apply(&mut doc);
+        let u = ev.update(&doc).unwrap();
+        check_against_fresh(&ev, &Ok(u), &doc, &rest);
+        let len = doc.mesh("m").unwrap().stack.len();
+        for k in 0..len {
+            check_heat_maps(&ev, &doc, &rest, k);
+        }
+    }
+}
