@@ -82,6 +82,16 @@ impl Mesh {
                 value: format!("{}", self.positions[i]),
             });
         }
+        // Texture coordinates pass through to exported files: a NaN there would reach them
+        // silently. (Normals are recomputed from the positions.)
+        if let Some(uvs) = &self.uvs
+            && let Some(i) = uvs.iter().position(|p| !p.is_finite())
+        {
+            return Err(CoreError::NotFinite {
+                what: format!("{what}: texture coordinate of vertex {i}"),
+                value: format!("{}", uvs[i]),
+            });
+        }
         Ok(())
     }
 

@@ -1,4 +1,4 @@
-//! Hostile glTF files (issue 14): each was a crash, an abort, a silent wrong result or a read
+//! Hostile mesh files (issue 14): each was a crash, an abort, a silent wrong result or a read
 //! of a file outside the glTF file's folder before the importer checked it. Each must now be
 //! refused with an error naming the file and the problem.
 
@@ -200,6 +200,25 @@ fn at_most_the_declared_length_is_read_and_a_short_file_is_refused() {
     let err = load(&write(dir.path(), "b.gltf", &triangle("short.bin"))).unwrap_err();
     assert!(
         err.contains("declares 44 bytes but its source holds only 20"),
+        "{err}"
+    );
+}
+
+#[test]
+fn non_finite_texture_coordinates_are_refused() {
+    // Issue 14: they passed `check` and reached the exported file.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("nan.obj");
+    std::fs::write(
+        &p,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt nan 0\nvt 0 inf\nf 1/1 2/2 3/3\n",
+    )
+    .unwrap();
+    let err = ductile_io::load_rest_mesh(&MeshRef::parse(p.to_str().unwrap()))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("nan.obj") && err.contains("texture coordinate of vertex 1"),
         "{err}"
     );
 }
