@@ -52,20 +52,106 @@ pub use scene::{
 };
 
 /// Writes `bytes` to `path` atomically: into a temporary file in the same directory, flushed
-/// to disk, then renamed over `path`. On any error the temporary file is removed and `path`
-/// is untouched.
+/// to disk, then renamed over `path`, and the directory flushed so the rename survives a
+/// crash. On any error the temporary file is removed and `path` is untouched.
+///
+/// Like a careful editor: an existing file keeps its permissions, a new one gets the
+/// permissions any new file gets (read-write for all, less the umask) rather than the
+/// temporary file's private 0600; a symbolic link at `path` stays a link and the file it
+/// points to is replaced.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let err = |source| IoError::Write {
         path: path.to_owned(),
         source,
     };
-    let dir = match path.parent() {
+    // Write through a symbolic link (one that dangles names the file to create).
+    let target = match std::fs::symlink_metadata(path) {
+        Ok(m) if m.file_type().is_symlink() => {
+            let link = std::fs::read_link(path).map_err(err)?;
+            match path.parent() {
+                Some(dir) if link.is_relative() => dir.join(link),
+                _ => link,
+            }
+        }
+        _ => path.to_owned(),
+    };
+    let dir = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(err)?;
+    let existing = std::fs::metadata(&target).ok().map(|m| m.permissions());
+    let mut builder = tempfile::Builder::new();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt as _;
+        // Created with 0666: the umask applies, as for any new file.
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder.tempfile_in(dir).map_err(err)?;
+    if let Some(permissions) = existing {
+        tmp.as_file().set_permissions(permissions).map_err(err)?;
+    }
     tmp.write_all(bytes).map_err(err)?;
     tmp.as_file().sync_all().map_err(err)?;
-    tmp.persist(path).map_err(|e| err(e.error))?;
+    tmp.persist(&target).map_err(|e| err(e.error))?;
+    // The rename is durable only once the directory is flushed. Some file systems refuse to
+    // open or sync a directory; the data itself is already on disk then.
+    #[cfg(unix)]
+    if let Ok(d) = std::fs::File::open(dir) {
+        let _ = d.sync_all();
+    }
     Ok(())
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use std::os::unix::fs::PermissionsExt as _;
+
+    use super::write_atomic;
+
+    fn mode(p: &std::path::Path) -> u32 {
+        std::fs::metadata(p).unwrap().permissions().mode() & 0o7777
+    }
+
+    #[test]
+    fn a_new_file_gets_the_permissions_of_any_new_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let plain = dir.path().join("plain");
+        std::fs::write(&plain, b"x").unwrap();
+        let ours = dir.path().join("ours.glb");
+        write_atomic(&ours, b"data").unwrap();
+        assert_eq!(
+            mode(&ours),
+            mode(&plain),
+            "not the umask's mode (0600 before)"
+        );
+    }
+
+    #[test]
+    fn an_existing_file_keeps_its_permissions() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("shared.ron");
+        std::fs::write(&p, b"old").unwrap();
+        std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o640)).unwrap();
+        write_atomic(&p, b"new").unwrap();
+        assert_eq!(mode(&p), 0o640);
+        assert_eq!(std::fs::read(&p).unwrap(), b"new");
+    }
+
+    #[test]
+    fn a_symbolic_link_stays_and_its_target_is_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let real = dir.path().join("real.glb");
+        std::fs::write(&real, b"old").unwrap();
+        let link = dir.path().join("link.glb");
+        std::os::unix::fs::symlink("real.glb", &link).unwrap();
+        write_atomic(&link, b"new").unwrap();
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(std::fs::read(&real).unwrap(), b"new");
+    }
 }
