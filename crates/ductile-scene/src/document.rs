@@ -215,6 +215,17 @@ impl Document {
         self.nodes.iter().position(|n| n.name == name)
     }
 
+    /// Every node's index by name (the first, should a name repeat): for walks over many
+    /// nodes, where [`Document::index_of`]'s linear search per step would be quadratic.
+    #[must_use]
+    pub fn name_index(&self) -> std::collections::HashMap<&str, usize> {
+        let mut index = std::collections::HashMap::with_capacity(self.nodes.len());
+        for (i, n) in self.nodes.iter().enumerate() {
+            index.entry(n.name.as_str()).or_insert(i);
+        }
+        index
+    }
+
     /// The node called `name`.
     pub fn node(&self, name: &str) -> Result<&Node> {
         self.nodes

@@ -17,12 +17,20 @@ impl Document {
     /// The node's world transform (product of its ancestors' local transforms).
     pub fn world_transform(&self, name: &str) -> Result<Affine3A> {
         let mut m = Affine3A::IDENTITY;
-        let mut current = Some(name.to_owned());
+        let mut current = Some(name);
         let mut steps = 0;
+        // A short chain walks with name lookups; a long one indexes the names once.
+        let index = (self.nodes.len() > 64).then(|| self.name_index());
         while let Some(c) = current {
-            let node = self.node(&c)?;
+            let node = match &index {
+                Some(index) => index
+                    .get(c)
+                    .map(|&i| &self.nodes[i])
+                    .ok_or_else(|| SceneError::NoSuchNode { name: c.to_owned() })?,
+                None => self.node(c)?,
+            };
             m = node.transform.affine() * m;
-            current = node.parent.clone();
+            current = node.parent.as_deref();
             steps += 1;
             if steps > self.nodes.len() {
                 return Err(SceneError::Cycle {
