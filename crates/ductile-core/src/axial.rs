@@ -286,6 +286,13 @@ impl Deformer for AxialTool {
                 ),
             });
         }
+        if self.rest.len() > crate::curve::MAX_CURVE_POINTS {
+            return Err(CoreError::OutOfRange {
+                what: format!("{what}: number of axis points"),
+                value: self.rest.len() as f64,
+                expected: "must be at most 4096",
+            });
+        }
         check_finite(|| format!("{what}: radius"), self.radius)?;
         if self.radius <= 0.0 {
             return Err(CoreError::OutOfRange {

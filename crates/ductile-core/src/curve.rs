@@ -77,6 +77,11 @@ pub struct Weights {
     pub values: [f32; MAX_DEGREE + 1],
 }
 
+/// The most control points of a B-spline curve (and of an axial tool's axis): far more than
+/// a hand-placed curve needs, few enough that binding stays interactive (the closest-point
+/// search samples 16 points per control point).
+pub const MAX_CURVE_POINTS: usize = 4096;
+
 impl CurveEvaluator {
     /// The evaluator for `count` control points. Fails (naming `what`) when the count does
     /// not fit the basis: fewer than 2 points, more than [`MAX_BEZIER_POINTS`] for Bézier,
@@ -105,6 +110,13 @@ impl CurveEvaluator {
                 })
             }
             CurveBasis::BSpline { degree } => {
+                if count > MAX_CURVE_POINTS {
+                    return Err(CoreError::OutOfRange {
+                        what: format!("{what}: number of B-spline control points"),
+                        value: count as f64,
+                        expected: "must be at most 4096",
+                    });
+                }
                 if degree == 0 || degree > MAX_DEGREE || degree >= count {
                     return Err(CoreError::OutOfRange {
                         what: format!("{what}: B-spline degree"),

@@ -406,7 +406,8 @@ impl FfsdBind {
         self.points.iter().map(|p| p.anchor).collect()
     }
 
-    /// `S_ref = maxₖ |D(V_min,k)|`, the displacement the height parameter is relative to.
+    /// `S_ref = maxₖ |D(V_min,k)|`, the displacement the height parameter is relative to;
+    /// 0 for a tool without a height limit (nothing reads it then, so the bind skips it).
     #[must_use]
     pub fn reference_size(&self) -> f32 {
         self.s_ref
@@ -439,11 +440,23 @@ impl FfsdBind {
     }
 }
 
+/// The most control points of one FFSD tool: far more than a macro set or a hand-made tool
+/// needs, few enough that the bind (nearest vertex of every point, and `S_ref`, quadratic in
+/// the points, when a height limit is set) stays interactive.
+pub const MAX_FFSD_POINTS: usize = 4096;
+
 impl Deformer for FfsdTool {
     type Bind = FfsdBind;
 
     fn validate(&self, what: &str) -> Result<()> {
         check_finite(|| format!("{what}: gain"), self.gain)?;
+        if self.points.len() > MAX_FFSD_POINTS {
+            return Err(CoreError::OutOfRange {
+                what: format!("{what}: number of control points"),
+                value: self.points.len() as f64,
+                expected: "must be at most 4096",
+            });
+        }
         for (k, p) in self.points.iter().enumerate() {
             p.validate(&format!("{what}: control point {k}"))?;
         }
@@ -487,6 +500,11 @@ impl Deformer for FfsdTool {
             })
             .collect();
         let mut bind = FfsdBind { points, s_ref: 0.0 };
+        // `S_ref` sums every point at every anchor (quadratic in the points); only the
+        // height limit reads it.
+        if self.height.is_none() {
+            return Ok(bind);
+        }
         bind.s_ref = bind
             .points
             .iter()

@@ -387,4 +387,29 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn tools_with_too_many_points_are_refused_not_left_to_run_for_minutes() {
+        // Issue 14: 20,000 FFSD points bound in O(points²); a 100,000-point B-spline took
+        // seconds to bind. Each kind refuses more than its documented limit.
+        use crate::ffsd::{ControlPoint, FfsdTool, MAX_FFSD_POINTS};
+        let n = MAX_FFSD_POINTS + 1;
+        let points = (0..n)
+            .map(|i| ControlPoint::basic(Vec3::new(i as f32, 0.0, 0.0), 0.1, 2.0, 0.5))
+            .collect();
+        let e = Tool::Ffsd(FfsdTool::new(points))
+            .validate("tool 'many'")
+            .unwrap_err();
+        assert!(e.to_string().contains("number of control points"), "{e}");
+        let polygon: Vec<Vec3> = (0..n).map(|i| Vec3::new(i as f32, 0.0, 0.0)).collect();
+        let curve = CurveTool::new(CurveBasis::BSpline { degree: 3 }, polygon.clone());
+        let e = Tool::Curve(curve).validate("tool 'long'").unwrap_err();
+        assert!(
+            e.to_string().contains("number of B-spline control points"),
+            "{e}"
+        );
+        let axis = AxialTool::new(polygon.into_iter().map(AxisPoint::at).collect(), 0.5);
+        let e = Tool::Axial(axis).validate("tool 'long'").unwrap_err();
+        assert!(e.to_string().contains("number of axis points"), "{e}");
+    }
 }
