@@ -55,6 +55,7 @@ struct HistoryV1 {
 /// Reads only `version` and whether there is an `entries` field; everything else is
 /// skipped.
 #[derive(Deserialize)]
+#[serde(rename = "History")]
 struct Probe {
     #[serde(default, deserialize_with = "present_u64")]
     version: Option<u64>,
@@ -74,6 +75,7 @@ fn present_any<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<()>, D::
 /// an `entries` field. Text that is not RON at all gives `false`.
 #[must_use]
 pub fn is_history_text(text: &str) -> bool {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     ron::Options::default()
         .from_str::<Probe>(text)
         .is_ok_and(|p| p.entries.is_some())
@@ -147,6 +149,11 @@ fn ron_error(path: &Path, e: &ron::error::SpannedError) -> IoError {
 
 /// Parses history text; `path` names the file and anchors a referenced base.
 pub fn parse_history(text: &str, path: &Path) -> Result<LoadedHistory> {
+    let text = crate::scene::file_body(
+        text,
+        path,
+        "a history: `(version: 1, base: ..., entries: [...])`",
+    )?;
     let opts = ron::Options::default();
     let probe: Probe = opts.from_str(text).map_err(|e| ron_error(path, &e))?;
     let version = probe

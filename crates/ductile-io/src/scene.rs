@@ -29,8 +29,10 @@ use crate::write_atomic;
 /// timeline) and `variants`; a version 1 reader would refuse those fields.
 pub const CURRENT_VERSION: u64 = 2;
 
-/// Reads only the `version` field; everything else is skipped.
+/// Reads only the `version` field; everything else is skipped. (Named `Scene` in parse
+/// errors: "expected opening `(` for struct `Scene`".)
 #[derive(Deserialize)]
+#[serde(rename = "Scene")]
 struct VersionProbe {
     #[serde(default, deserialize_with = "present")]
     version: Option<u64>,
@@ -129,8 +131,25 @@ fn ron_options() -> ron::Options {
     ron::Options::default()
 }
 
+/// The text of a RON file without its UTF-8 byte-order mark (editors on Windows add one),
+/// or an error naming the file when it holds nothing but white space; `expected` says what
+/// it should hold.
+pub(crate) fn file_body<'a>(text: &'a str, path: &Path, expected: &str) -> Result<&'a str> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    if text.trim().is_empty() {
+        return Err(IoError::Ron {
+            path: path.to_owned(),
+            line: 1,
+            column: 1,
+            message: format!("the file is empty (expected {expected})"),
+        });
+    }
+    Ok(text)
+}
+
 /// Parses scene text; `path` names the file in errors.
 pub fn parse_scene(text: &str, path: &Path) -> Result<Document> {
+    let text = file_body(text, path, "a scene: `(version: 2, nodes: [...])`")?;
     let opts = ron_options();
     let probe: VersionProbe = opts.from_str(text).map_err(|e| ron_error(path, &e))?;
     let version = probe.version.ok_or_else(|| IoError::MissingVersion {
@@ -329,4 +348,41 @@ pub fn check_scene(path: impl AsRef<Path>) -> Vec<IoError> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::parse_scene;
+    use crate::history_file::{is_history_text, parse_history};
+
+    #[test]
+    fn a_byte_order_mark_is_skipped_and_an_empty_file_is_named_as_such() {
+        // Issue 14: both gave an error about an internal type (`VersionProbe`).
+        let p = Path::new("face.ron");
+        let doc = parse_scene("\u{feff}(version: 1, nodes: [])", p).unwrap();
+        assert!(doc.nodes.is_empty());
+        for empty in ["", "  \n\t", "\u{feff}"] {
+            let e = parse_scene(empty, p).unwrap_err().to_string();
+            assert_eq!(
+                e,
+                "face.ron:1:1: the file is empty (expected a scene: `(version: 2, nodes: [...])`)"
+            );
+        }
+        let e = parse_scene("[1, 2]", p).unwrap_err().to_string();
+        assert!(e.contains("struct `Scene`") && !e.contains("Probe"), "{e}");
+
+        let h = Path::new("face.history.ron");
+        let text = "\u{feff}(version: 1, base: Inline((nodes: [])), entries: [])";
+        assert!(is_history_text(text));
+        if let Err(e) = parse_history(text, h) {
+            panic!("{e}");
+        }
+        let e = parse_history("", h).unwrap_err().to_string();
+        assert!(
+            e.contains("face.history.ron:1:1: the file is empty (expected a history"),
+            "{e}"
+        );
+    }
 }
