@@ -628,18 +628,23 @@ impl Deformer for LatticeTool {
                 });
             }
             if AxisBasis::new(&self.basis, a, c).is_none() {
-                let expected = match self.basis {
-                    LatticeBasis::Bernstein => {
-                        "a Bernstein lattice has 2 to 16 control points per axis (degree ≤ 15)"
-                    }
-                    LatticeBasis::BSpline { .. } => {
-                        "a B-spline lattice needs 1 ≤ degree ≤ 15 and more control points than its degree"
+                // Name both numbers: the count alone read as if the count were wrong.
+                let problem = match self.basis {
+                    LatticeBasis::Bernstein => format!(
+                        "axis {a} has {c} control points; a Bernstein lattice has 2 to 16 per \
+                         axis (degree = count − 1 ≤ 15)"
+                    ),
+                    LatticeBasis::BSpline { degree } => {
+                        let p = [degree.0, degree.1, degree.2][a];
+                        format!(
+                            "axis {a} has degree {p} and {c} control points; a B-spline lattice \
+                             needs 1 ≤ degree ≤ 15 and more control points than its degree"
+                        )
                     }
                 };
-                return Err(CoreError::OutOfRange {
-                    what: format!("{what}: counts[{a}] / degree[{a}]"),
-                    value: c as f64,
-                    expected,
+                return Err(CoreError::Degenerate {
+                    what: what.to_owned(),
+                    problem,
                 });
             }
         }
@@ -768,6 +773,24 @@ mod tests {
         ] {
             assert!((lat.coords(f.point(c)) - c).abs().max_element() < 1e-5);
         }
+    }
+
+    #[test]
+    fn degree_errors_name_the_degree_and_the_count() {
+        // Issue 14: the message printed only the count, as if the count were wrong.
+        let e = LatticeTool::bspline(skew_frame(), (4, 6, 5), (5, 2, 3))
+            .validate("tool 'cage'")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("axis 0 has degree 5 and 4 control points"),
+            "{e}"
+        );
+        let e = LatticeTool::bernstein(skew_frame(), (4, 17, 4))
+            .validate("tool 'cage'")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("axis 1 has 17 control points"), "{e}");
     }
 
     #[test]

@@ -40,10 +40,25 @@ pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<u8> {
             "{mark}{:>width$}  {}  {}",
             k + 1,
             utc(e.time_ms),
-            e.label
+            printable(&e.label)
         )?;
     }
     Ok(0)
+}
+
+/// `text` with its control characters escaped (`\u{1b}`, `\n`, …), so that a label from a
+/// file cannot move the cursor, recolour or clear the terminal it is printed to.
+#[must_use]
+pub fn printable(text: &str) -> String {
+    text.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }
 
 /// `time_ms` (milliseconds since the UNIX epoch) as `YYYY-MM-DD HH:MM:SS` UTC.
@@ -76,7 +91,14 @@ fn civil_from_days(days: u64) -> (u64, u64, u64) {
 
 #[cfg(test)]
 mod tests {
-    use super::utc;
+    use super::{printable, utc};
+
+    #[test]
+    fn labels_print_without_terminal_escapes() {
+        // Issue 14: history labels with control characters were printed raw.
+        assert_eq!(printable("drag 'nose'"), "drag 'nose'");
+        assert_eq!(printable("a\u{1b}[2Jb\nc"), "a\\u{1b}[2Jb\\nc");
+    }
 
     #[test]
     fn dates() {
