@@ -190,6 +190,16 @@ pub fn parse_history(text: &str, path: &Path) -> Result<LoadedHistory> {
             (doc, scene_path)
         }
     };
+    // The base gets the checks a scene file gets (`load_scene`, `check`, `apply`): replay and
+    // history must not accept a base (duplicate names, cycles, NaN, missing tools) that
+    // apply would refuse.
+    let problems = base.problems();
+    if !problems.is_empty() {
+        return Err(IoError::Scene {
+            path: mesh_root.clone(),
+            problems,
+        });
+    }
     let len = file.entries.len();
     let cursor = file.cursor.unwrap_or(len);
     if cursor > len {
@@ -259,4 +269,35 @@ pub fn save_history(path: impl AsRef<Path>, history: &History, base: SaveBase<'_
         source: std::io::Error::other(e),
     })?;
     write_atomic(path, text.as_bytes())
+}
+
+#[cfg(test)]
+mod history_base_tests {
+    use std::path::Path;
+
+    use super::parse_history;
+
+    #[test]
+    fn an_inline_base_gets_the_checks_of_a_scene() {
+        // Issue 14: `replay` and `history` accepted bases that `apply` refused.
+        let h = Path::new("bad.history.ron");
+        for (base, what) in [
+            (
+                "(nodes: [(name: \"a\", kind: Group), (name: \"a\", kind: Group)])",
+                "node name 'a' is used more than once",
+            ),
+            (
+                "(nodes: [(name: \"a\", parent: Some(\"b\"), kind: Group), (name: \"b\", parent: Some(\"a\"), kind: Group)])",
+                "cycle",
+            ),
+            (
+                "(nodes: [(name: \"a\", transform: (translation: (NaN, 0.0, 0.0)), kind: Group)])",
+                "not a finite number",
+            ),
+        ] {
+            let text = format!("(version: 1, base: Inline({base}), entries: [])");
+            let e = parse_history(&text, h).unwrap_err().to_string();
+            assert!(e.contains("bad.history.ron") && e.contains(what), "{e}");
+        }
+    }
 }
