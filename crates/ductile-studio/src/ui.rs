@@ -68,6 +68,23 @@ pub const LEFT_WIDTH: f32 = 360.0;
 /// The right panel's width at start (inspector, identikit), in logical pixels.
 pub const RIGHT_WIDTH: f32 = 440.0;
 
+/// A mode's hint (sketch mode, box select) in a dark box at the top left of the 3-D view.
+fn paint_hint(painter: &egui::Painter, view: egui::Rect, hint: String) {
+    let at = view.left_top() + egui::vec2(10.0, 10.0);
+    let galley = painter.layout(
+        hint,
+        egui::FontId::proportional(14.0),
+        egui::Color32::WHITE,
+        view.width() - 20.0,
+    );
+    painter.rect_filled(
+        egui::Rect::from_min_size(at, galley.size()).expand(5.0),
+        4.0,
+        egui::Color32::from_black_alpha(170),
+    );
+    painter.galley(at, galley, egui::Color32::WHITE);
+}
+
 /// Draws every panel and forwards what they asked for.
 #[allow(clippy::too_many_arguments)]
 pub fn studio_ui(
@@ -282,19 +299,7 @@ pub fn studio_ui(
             ));
         }
         if let Some(hint) = sketch.hint() {
-            let at = free.left_top() + egui::vec2(10.0, 10.0);
-            let galley = painter.layout(
-                hint,
-                egui::FontId::proportional(14.0),
-                egui::Color32::WHITE,
-                free.width() - 20.0,
-            );
-            painter.rect_filled(
-                egui::Rect::from_min_size(at, galley.size()).expand(5.0),
-                4.0,
-                egui::Color32::from_black_alpha(170),
-            );
-            painter.galley(at, galley, egui::Color32::WHITE);
+            paint_hint(&painter, free, hint);
         }
     }
     // Box select: the hint and the rectangle being drawn.
@@ -319,19 +324,7 @@ pub fn studio_ui(
             );
         }
         if let Some(hint) = inputs.box_select.hint() {
-            let at = free.left_top() + egui::vec2(10.0, 10.0);
-            let galley = painter.layout(
-                hint.to_owned(),
-                egui::FontId::proportional(14.0),
-                egui::Color32::WHITE,
-                free.width() - 20.0,
-            );
-            painter.rect_filled(
-                egui::Rect::from_min_size(at, galley.size()).expand(5.0),
-                4.0,
-                egui::Color32::from_black_alpha(170),
-            );
-            painter.galley(at, galley, egui::Color32::WHITE);
+            paint_hint(&painter, free, hint.to_owned());
         }
     }
     let pointer_in_free = ctx.pointer_latest_pos().is_some_and(|p| free.contains(p));
