@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 
 use ductile_core::ffsd::FfsdMacro;
 use ductile_core::mesh::{Deformed, RestMesh};
-use ductile_scene::document::{Document, Node, NodeKind};
+use ductile_scene::document::{Document, Node, NodeKind, unique_keys};
 use ductile_scene::time::Animation;
 use ductile_scene::variant::Variant;
 use serde::{Deserialize, Serialize};
@@ -51,7 +51,7 @@ struct SceneV1 {
     version: u64,
     #[serde(default)]
     nodes: Vec<Node>,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unique_keys")]
     macros: BTreeMap<String, FfsdMacro>,
 }
 
@@ -63,11 +63,11 @@ struct SceneV2 {
     version: u64,
     #[serde(default)]
     nodes: Vec<Node>,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unique_keys")]
     macros: BTreeMap<String, FfsdMacro>,
     #[serde(default)]
     animation: Animation,
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unique_keys")]
     variants: BTreeMap<String, Variant>,
 }
 
@@ -384,5 +384,24 @@ mod tests {
             e.contains("face.history.ron:1:1: the file is empty (expected a history"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn a_name_twice_in_a_map_is_refused_not_the_last_kept() {
+        // Issue 14: duplicate keys in `areas` / `macros` maps: the last silently won.
+        let p = Path::new("twice.ron");
+        let areas = "(version: 2, nodes: [(name: \"m\", kind: Mesh((source: \"a.obj\", \
+                     areas: {\"top\": Vertices([0]), \"top\": Vertices([1])})))])";
+        let e = parse_scene(areas, p).unwrap_err().to_string();
+        assert!(
+            e.starts_with("twice.ron:") && e.contains("\"top\" appears twice"),
+            "{e}"
+        );
+        let macros = "(version: 1, macros: {\"nose\": (label: \"a\", points: []), \
+                      \"nose\": (label: \"b\", points: [])})";
+        let e = parse_scene(macros, p).unwrap_err().to_string();
+        assert!(e.contains("\"nose\" appears twice"), "{e}");
+        let once = "(version: 1, macros: {\"nose\": (label: \"a\", points: [])})";
+        assert_eq!(parse_scene(once, p).unwrap().macros.len(), 1);
     }
 }

@@ -25,13 +25,17 @@ pub struct Document {
     #[serde(default)]
     pub nodes: Vec<Node>,
     /// The macro library, by name.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unique_keys")]
     pub macros: BTreeMap<String, FfsdMacro>,
     /// Keyframe tracks and the timeline (not written when it is the default, empty one).
     #[serde(default, skip_serializing_if = "Animation::is_default")]
     pub animation: Animation,
     /// Named variants: snapshots of the tools' states (the identikit's suspects), by name.
-    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    #[serde(
+        default,
+        skip_serializing_if = "BTreeMap::is_empty",
+        deserialize_with = "unique_keys"
+    )]
     pub variants: BTreeMap<String, Variant>,
 }
 
@@ -96,7 +100,7 @@ pub struct MeshNode {
     #[serde(default)]
     pub stack: Vec<LayerSpec>,
     /// Named vertex areas.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unique_keys")]
     pub areas: BTreeMap<String, Area>,
 }
 
@@ -359,4 +363,39 @@ pub(crate) fn wrong_kind(name: &str, found: &NodeKind, expected: &'static str) -
         found: found.name(),
         expected,
     }
+}
+
+/// Deserialises a map by name, refusing a key that appears twice (a plain `BTreeMap` would
+/// keep the last one silently): for `macros`, `areas` and `variants` of scene files.
+///
+/// # Errors
+/// The deserialiser's errors, and "the key … appears twice".
+pub fn unique_keys<'de, D, V>(d: D) -> std::result::Result<BTreeMap<String, V>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    V: Deserialize<'de>,
+{
+    struct Unique<V>(std::marker::PhantomData<V>);
+    impl<'de, V: Deserialize<'de>> serde::de::Visitor<'de> for Unique<V> {
+        type Value = BTreeMap<String, V>;
+        fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.write_str("a map with unique names")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(
+            self,
+            mut map: A,
+        ) -> std::result::Result<Self::Value, A::Error> {
+            let mut out = BTreeMap::new();
+            while let Some((key, value)) = map.next_entry::<String, V>()? {
+                if out.contains_key(&key) {
+                    return Err(serde::de::Error::custom(format!(
+                        "the name {key:?} appears twice in the map"
+                    )));
+                }
+                out.insert(key, value);
+            }
+            Ok(out)
+        }
+    }
+    d.deserialize_map(Unique(std::marker::PhantomData))
 }
