@@ -64,3 +64,26 @@ fn errors_name_the_file_and_never_panic_on_odd_input() {
     assert_eq!(r, Ok(1));
     assert!(out.contains("nope.ron: cannot read the file"), "{out}");
 }
+
+#[test]
+fn check_reports_bad_areas_no_layer_uses_yet() {
+    // Issue 14: `check` missed out-of-range vertex indices of areas no layer used.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("areas.ron");
+    let mesh = data("tetra.obj");
+    std::fs::write(
+        &scene,
+        format!(
+            "(version: 1, nodes: [(name: \"tetra\", kind: Mesh((source: {:?}, \
+             areas: {{\"fine\": Vertices([0, 1]), \"unused\": Vertices([0, 99])}})))])",
+            mesh.to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    let (r, out) = cli(&["check", scene.to_str().unwrap()]);
+    assert_eq!(r, Ok(1), "{out}");
+    assert!(
+        out.contains("area 'unused'") && out.contains("99") && !out.contains("'fine'"),
+        "{out}"
+    );
+}

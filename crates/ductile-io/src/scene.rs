@@ -335,13 +335,26 @@ pub fn check_scene(path: impl AsRef<Path>) -> Vec<IoError> {
         match load_node_mesh(path, &node.name, &m.source) {
             Err(e) => out.push(e),
             Ok(loaded) => {
-                if let Err(source) = document.evaluate(&node.name, &loaded.rest) {
+                let mut report = |source: ductile_scene::error::SceneError| {
                     let text = source.to_string();
                     if !out.iter().any(|e| e.to_string().contains(&text)) {
                         out.push(IoError::SceneProblem {
                             path: path.to_owned(),
                             source,
                         });
+                    }
+                };
+                if let Err(source) = document.evaluate(&node.name, &loaded.rest) {
+                    report(source);
+                }
+                // Every area, used by a layer yet or not: a bad one would fail only when a
+                // layer (or a macro) starts using it.
+                for (area, def) in &m.areas {
+                    let what = format!("mesh '{}', area '{area}'", node.name);
+                    if let Err(source) =
+                        ductile_scene::resolve::resolve_area(def, &loaded.rest, &what)
+                    {
+                        report(source);
                     }
                 }
             }
