@@ -4,6 +4,7 @@
 use std::collections::BTreeSet;
 
 use bevy::prelude::*;
+use ductile_scene::document::{Document, NodeKind};
 use ductile_scene::handles::HandleId;
 
 /// The selection. Views read and write it directly: it is view state, not document state,
@@ -41,6 +42,25 @@ impl Selection {
     #[must_use]
     pub fn is_hidden(&self, node: &str) -> bool {
         self.hidden.contains(node)
+    }
+
+    /// The mesh the stack panel shows and new tools go on: the selected layer's mesh, the
+    /// selected mesh, the mesh a selected node is under, or the first mesh of `doc`.
+    #[must_use]
+    pub fn mesh_in_focus(&self, doc: &Document) -> Option<String> {
+        if let Some((m, _)) = &self.layer {
+            return Some(m.clone());
+        }
+        let mut current = self.node.as_deref();
+        for _ in 0..=doc.nodes.len() {
+            let Some(name) = current else { break };
+            let Ok(node) = doc.node(name) else { break };
+            if matches!(node.kind, NodeKind::Mesh(_)) {
+                return Some(name.to_owned());
+            }
+            current = node.parent.as_deref();
+        }
+        doc.mesh_names().first().map(|s| (*s).to_owned())
     }
 }
 

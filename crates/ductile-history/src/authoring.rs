@@ -4,7 +4,6 @@
 
 use ductile_core::influence::Shape;
 use ductile_core::tool::Tool;
-use ductile_scene::create::unique_name;
 use ductile_scene::prelude::*;
 
 use crate::check::{mesh_at, node_index};
@@ -23,7 +22,7 @@ impl Operation {
         transform: Transform,
     ) -> Result<(Self, String)> {
         let (_, m) = mesh_at(doc, mesh)?;
-        let name = unique_name(doc, stem);
+        let name = doc.unique_name(stem);
         let kind = tool.kind_name();
         let node = Node {
             name: name.clone(),
@@ -59,7 +58,7 @@ impl Operation {
         if let Some(p) = parent {
             node_index(doc, p)?;
         }
-        let name = unique_name(doc, stem);
+        let name = doc.unique_name(stem);
         let node = Node {
             name: name.clone(),
             parent: parent.map(str::to_owned),
@@ -100,7 +99,7 @@ impl Operation {
         if let Some(p) = parent {
             node_index(doc, p)?;
         }
-        let name = unique_name(doc, stem);
+        let name = doc.unique_name(stem);
         let node = Node {
             name: name.clone(),
             parent: parent.map(str::to_owned),
@@ -131,7 +130,7 @@ impl Operation {
                 len: m.stack.len(),
             })?;
         let original = &doc.nodes[node_index(doc, &layer.tool)?];
-        let name = unique_name(doc, &format!("{}-copy", layer.tool));
+        let name = doc.unique_name(&format!("{}-copy", layer.tool));
         let node = Node {
             name: name.clone(),
             ..original.clone()

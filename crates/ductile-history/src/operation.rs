@@ -830,35 +830,17 @@ impl Operation {
                 index,
                 old,
                 new,
-            } => {
-                let (expected, target) = dir.pick(old, new);
-                let (i, m) = mesh_at(doc, mesh)?;
-                let layer = layer_at(m, mesh, *index)?;
-                same(&layer.enabled, expected, || {
-                    format!("mesh '{mesh}', layer {index}: enabled")
-                })?;
-                if let Some(m) = mesh_mut(doc, i) {
-                    m.stack[*index].enabled = *target;
-                }
-                Ok(())
-            }
+            } => set_layer_flag(doc, mesh, *index, dir.pick(old, new), "enabled", |l| {
+                &mut l.enabled
+            }),
             O::SetLayerSolo {
                 mesh,
                 index,
                 old,
                 new,
-            } => {
-                let (expected, target) = dir.pick(old, new);
-                let (i, m) = mesh_at(doc, mesh)?;
-                let layer = layer_at(m, mesh, *index)?;
-                same(&layer.solo, expected, || {
-                    format!("mesh '{mesh}', layer {index}: solo")
-                })?;
-                if let Some(m) = mesh_mut(doc, i) {
-                    m.stack[*index].solo = *target;
-                }
-                Ok(())
-            }
+            } => set_layer_flag(doc, mesh, *index, dir.pick(old, new), "solo", |l| {
+                &mut l.solo
+            }),
             O::SetLayerWeight {
                 mesh,
                 index,
@@ -1051,6 +1033,28 @@ fn run_group(doc: &mut Document, label: &str, ops: &[Operation], dir: Dir) -> Re
                 source: Box::new(e),
             });
         }
+    }
+    Ok(())
+}
+
+/// Sets one on/off flag of layer `index` of `mesh` (enabled, solo) to `target` after
+/// checking it holds `expected`.
+fn set_layer_flag(
+    doc: &mut Document,
+    mesh: &str,
+    index: usize,
+    (expected, target): (&bool, &bool),
+    name: &str,
+    flag: fn(&mut LayerSpec) -> &mut bool,
+) -> Result<()> {
+    let (i, m) = mesh_at(doc, mesh)?;
+    layer_at(m, mesh, index)?;
+    if let Some(m) = mesh_mut(doc, i) {
+        let value = flag(&mut m.stack[index]);
+        same(&*value, expected, || {
+            format!("mesh '{mesh}', layer {index}: {name}")
+        })?;
+        *value = *target;
     }
     Ok(())
 }

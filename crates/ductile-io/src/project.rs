@@ -459,7 +459,7 @@ impl Project {
             .filter(|s| !s.is_empty())
             .unwrap_or_else(|| "mesh".to_owned());
         let node = Node {
-            name: unique_name(&self.document, &stem),
+            name: self.document.unique_name(&stem),
             parent: None,
             transform: Default::default(),
             kind: NodeKind::Mesh(MeshNode {
@@ -684,17 +684,6 @@ fn op_sources(op: &mut Operation, f: &mut impl FnMut(&mut String)) {
     }
 }
 
-/// `stem`, or `stem-2`, `stem-3`, ... : the first name no node of `doc` has.
-fn unique_name(doc: &Document, stem: &str) -> String {
-    if doc.index_of(stem).is_none() {
-        return stem.to_owned();
-    }
-    (2..)
-        .map(|k| format!("{stem}-{k}"))
-        .find(|n| doc.index_of(n).is_none())
-        .unwrap_or_else(|| stem.to_owned())
-}
-
 /// How many numbered names [`materialize`] tries before giving up.
 const MAX_COPIES: usize = 1000;
 
@@ -901,7 +890,7 @@ mod tests {
     #[test]
     fn unique_names_count_up() {
         let mut doc = Document::default();
-        assert_eq!(unique_name(&doc, "head"), "head");
+        assert_eq!(doc.unique_name("head"), "head");
         for name in ["head", "head-2"] {
             doc.nodes.push(Node {
                 name: name.to_owned(),
@@ -910,6 +899,6 @@ mod tests {
                 kind: NodeKind::Group,
             });
         }
-        assert_eq!(unique_name(&doc, "head"), "head-3");
+        assert_eq!(doc.unique_name("head"), "head-3");
     }
 }

@@ -36,7 +36,6 @@ use ductile_core::surface::{ShapeSurfaceTool, SurfaceFrame};
 use ductile_core::tool::Tool;
 use glam::{Quat, Vec3};
 
-use crate::document::Document;
 use crate::transform::Transform;
 
 /// The kinds of lattice the Add menu offers.
@@ -489,18 +488,6 @@ pub fn resized_lattice(l: &LatticeTool, counts: (u32, u32, u32)) -> LatticeTool 
     }
 }
 
-/// `stem`, or `stem-2`, `stem-3`, …: the first name no node of `doc` has.
-#[must_use]
-pub fn unique_name(doc: &Document, stem: &str) -> String {
-    if doc.index_of(stem).is_none() {
-        return stem.to_owned();
-    }
-    (2..)
-        .map(|k| format!("{stem}-{k}"))
-        .find(|n| doc.index_of(n).is_none())
-        .unwrap_or_else(|| stem.to_owned())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -587,20 +574,5 @@ mod tests {
             [(3, 0, 3)]
         );
         assert_eq!(odd.points[0].offset.z, -0.2);
-    }
-
-    #[test]
-    fn names_are_unique() {
-        let mut doc = Document::default();
-        assert_eq!(unique_name(&doc, "lattice"), "lattice");
-        for name in ["lattice", "lattice-2"] {
-            doc.nodes.push(crate::document::Node {
-                name: name.into(),
-                parent: None,
-                transform: Transform::IDENTITY,
-                kind: crate::document::NodeKind::Group,
-            });
-        }
-        assert_eq!(unique_name(&doc, "lattice"), "lattice-3");
     }
 }

@@ -219,6 +219,18 @@ impl Document {
         self.nodes.iter().position(|n| n.name == name)
     }
 
+    /// `stem`, or `stem-2`, `stem-3`, …: the first name no node has.
+    #[must_use]
+    pub fn unique_name(&self, stem: &str) -> String {
+        if self.index_of(stem).is_none() {
+            return stem.to_owned();
+        }
+        (2..)
+            .map(|k| format!("{stem}-{k}"))
+            .find(|n| self.index_of(n).is_none())
+            .unwrap_or_else(|| stem.to_owned())
+    }
+
     /// Every node's index by name (the first, should a name repeat): for walks over many
     /// nodes, where [`Document::index_of`]'s linear search per step would be quadratic.
     #[must_use]
@@ -398,4 +410,24 @@ where
         }
     }
     d.deserialize_map(Unique(std::marker::PhantomData))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_unique() {
+        let mut doc = Document::default();
+        assert_eq!(doc.unique_name("lattice"), "lattice");
+        for name in ["lattice", "lattice-2"] {
+            doc.nodes.push(Node {
+                name: name.into(),
+                parent: None,
+                transform: Transform::IDENTITY,
+                kind: NodeKind::Group,
+            });
+        }
+        assert_eq!(doc.unique_name("lattice"), "lattice-3");
+    }
 }

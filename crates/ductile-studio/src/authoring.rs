@@ -9,7 +9,7 @@ use bevy::prelude::*;
 use ductile_bevy::prelude::*;
 use ductile_history::operation::Operation;
 use ductile_scene::create::{self, Placement, SurfacePoint, front_point_of};
-use ductile_scene::document::{Document, NodeKind};
+use ductile_scene::document::Document;
 use ductile_scene::sketching::SketchKind;
 
 use crate::panels::add_menu::AddRequest;
@@ -24,25 +24,6 @@ pub struct AddNode {
     pub request: AddRequest,
     /// The cursor, for placing on the surface under it.
     pub cursor: Option<Vec2>,
-}
-
-/// The mesh new tools go on: the selected layer's mesh, the selected mesh, the mesh a
-/// selected node is under, or the first mesh.
-#[must_use]
-pub fn mesh_in_focus(doc: &Document, selection: &Selection) -> Option<String> {
-    if let Some((m, _)) = &selection.layer {
-        return Some(m.clone());
-    }
-    let mut current = selection.node.clone();
-    for _ in 0..=doc.nodes.len() {
-        let Some(name) = current else { break };
-        let Ok(node) = doc.node(&name) else { break };
-        if matches!(node.kind, NodeKind::Mesh(_)) {
-            return Some(name);
-        }
-        current = node.parent.clone();
-    }
-    doc.mesh_names().first().map(|s| (*s).to_owned())
 }
 
 /// The current (deformed) stored positions of mesh entity `ev`, or its rest positions.
@@ -135,7 +116,7 @@ pub fn add_nodes(
             }
             continue;
         }
-        let Some(mesh) = mesh_in_focus(document, &selection) else {
+        let Some(mesh) = selection.mesh_in_focus(document) else {
             notices
                 .0
                 .push("Add: the scene has no mesh (File ▸ Import mesh…)".to_owned());

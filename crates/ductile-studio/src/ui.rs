@@ -68,6 +68,22 @@ pub const LEFT_WIDTH: f32 = 360.0;
 /// The right panel's width at start (inspector, identikit), in logical pixels.
 pub const RIGHT_WIDTH: f32 = 440.0;
 
+/// A resizable side panel that keeps the width the user gives it (`width` at start):
+/// content wider than that scrolls sideways instead of widening the panel, so the viewport
+/// does not jump when a long name appears.
+fn side_panel(
+    panel: egui::Panel,
+    width: f32,
+    root: &mut egui::Ui,
+    contents: impl FnOnce(&mut egui::Ui),
+) -> egui::InnerResponse<()> {
+    panel.resizable(true).default_size(width).show(root, |ui| {
+        egui::ScrollArea::horizontal()
+            .auto_shrink([false, false])
+            .show(ui, contents);
+    })
+}
+
 /// A mode's hint (sketch mode, box select) in a dark box at the top left of the 3-D view.
 fn paint_hint(painter: &egui::Painter, view: egui::Rect, hint: String) {
     let at = view.left_top() + egui::vec2(10.0, 10.0);
@@ -148,58 +164,50 @@ pub fn studio_ui(
         panels.status.show(ui, &info);
     });
 
-    // The side panels keep the width the user gives them (dragging their edge): content
-    // wider than that scrolls sideways instead of widening the panel, so the viewport does
-    // not jump when a long name appears.
-    let left = egui::Panel::left("left-panel")
-        .resizable(true)
-        .default_size(LEFT_WIDTH)
-        .show(&mut root, |ui| {
-            egui::ScrollArea::horizontal()
-                .id_salt("left-panel-h")
-                .auto_shrink([false, false])
-                .show(ui, |ui| {
-                    ui.heading("Scene");
-                    panels.outliner.show(ui, &mut cx);
-                    ui.separator();
-                    ui.heading("Stack");
-                    panels.stack.show(ui, &mut cx);
-                    ui.separator();
-                    ui.heading("History");
-                    panels.history.show(ui, &mut cx);
-                });
-        });
+    let left = side_panel(
+        egui::Panel::left("left-panel"),
+        LEFT_WIDTH,
+        &mut root,
+        |ui| {
+            ui.heading("Scene");
+            panels.outliner.show(ui, &mut cx);
+            ui.separator();
+            ui.heading("Stack");
+            panels.stack.show(ui, &mut cx);
+            ui.separator();
+            ui.heading("History");
+            panels.history.show(ui, &mut cx);
+        },
+    );
 
-    let right =
-        egui::Panel::right("right-panel")
-            .resizable(true)
-            .default_size(RIGHT_WIDTH)
-            .show(&mut root, |ui| {
-                egui::ScrollArea::horizontal()
-                    .id_salt("right-panel-h")
-                    .auto_shrink([false, false])
-                    .show(ui, |ui| {
-                        ui.heading("Inspector");
-                        // Without macro tools the identikit section is one line: the inspector
-                        // takes the height it would have used.
-                        let has_macros =
-                            cx.doc.document().nodes.iter().any(|n| {
-                                matches!(n.kind, ductile_scene::document::NodeKind::Macro(_))
-                            });
-                        let height = if has_macros {
-                            ui.available_height() * 0.6
-                        } else {
-                            (ui.available_height() - 60.0).max(120.0)
-                        };
-                        egui::ScrollArea::vertical()
-                            .id_salt("inspector")
-                            .max_height(height)
-                            .show(ui, |ui| panels.inspector.show(ui, &mut cx));
-                        ui.separator();
-                        ui.heading("Identikit");
-                        panels.macros.show(ui, &mut cx);
-                    });
-            });
+    let right = side_panel(
+        egui::Panel::right("right-panel"),
+        RIGHT_WIDTH,
+        &mut root,
+        |ui| {
+            ui.heading("Inspector");
+            // Without macro tools the identikit section is one line: the inspector takes the
+            // height it would have used.
+            let has_macros = cx
+                .doc
+                .document()
+                .nodes
+                .iter()
+                .any(|n| matches!(n.kind, ductile_scene::document::NodeKind::Macro(_)));
+            let height = if has_macros {
+                ui.available_height() * 0.6
+            } else {
+                (ui.available_height() - 60.0).max(120.0)
+            };
+            egui::ScrollArea::vertical()
+                .id_salt("inspector")
+                .max_height(height)
+                .show(ui, |ui| panels.inspector.show(ui, &mut cx));
+            ui.separator();
+            ui.heading("Identikit");
+            panels.macros.show(ui, &mut cx);
+        },
+    );
 
     if let Some(a) = dialogs.show(&ctx) {
         actions.write(a);
@@ -226,7 +234,7 @@ pub fn studio_ui(
         match r {
             PanelRequest::RedrawSketch(node) => {
                 let doc = inputs.doc.document();
-                let mesh = crate::authoring::mesh_in_focus(doc, cx.selection);
+                let mesh = cx.selection.mesh_in_focus(doc);
                 let kind = match doc.node(&node).map(|n| &n.kind) {
                     Ok(ductile_scene::document::NodeKind::Tool(
                         ductile_core::tool::Tool::Sketch(t),

@@ -42,30 +42,10 @@ fn influence_summary(inf: Option<&InfluenceSpec>) -> String {
 }
 
 impl StackPanel {
-    /// The mesh the stack panel shows: the selected layer's, the selected mesh, the mesh a
-    /// selected node is parented under, or the first mesh.
-    #[must_use]
-    pub fn mesh_in_focus(cx: &PanelContext<'_>) -> Option<String> {
-        let doc = cx.doc.document();
-        if let Some((m, _)) = &cx.selection.layer {
-            return Some(m.clone());
-        }
-        let mut current = cx.selection.node.clone();
-        for _ in 0..=doc.nodes.len() {
-            let Some(name) = current else { break };
-            let Ok(node) = doc.node(&name) else { break };
-            if matches!(node.kind, NodeKind::Mesh(_)) {
-                return Some(name);
-            }
-            current = node.parent.clone();
-        }
-        doc.mesh_names().first().map(|s| (*s).to_owned())
-    }
-
     /// Draws the stack of the mesh in focus.
     pub fn show(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>) {
         let doc = cx.doc.document();
-        let Some(mesh_name) = Self::mesh_in_focus(cx) else {
+        let Some(mesh_name) = cx.selection.mesh_in_focus(doc) else {
             ui.weak("No mesh in the scene. File ▸ Import mesh… adds one.");
             return;
         };
