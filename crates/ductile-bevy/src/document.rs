@@ -4,6 +4,12 @@
 //! for edits with [`DocumentCommand`] messages, which [`apply_document_commands`] applies in
 //! [`DuctileSystems::Edit`](crate::DuctileSystems::Edit). Nothing else mutates the document,
 //! so the ECS mirror and the deformed meshes always follow it.
+//!
+//! The document has a current time ([`SceneDocument::time`]). Views show and edit the
+//! **pose** at that time ([`SceneDocument::shown`], the document with every animated
+//! channel at its track's value); an edit built against the pose is recorded as the edit of
+//! the document that has the same effect at that time ([`Operation::onto_base`]): a changed
+//! animated channel gets a key there.
 
 use bevy::prelude::*;
 use ductile_history::history::History;
@@ -25,6 +31,12 @@ pub struct SceneDocument {
     /// Moves on when the document and its history are replaced (another file opened), so
     /// that what views remember per history step can be forgotten.
     epoch: u64,
+    /// The current time in seconds.
+    time: f32,
+    /// The document at `time` when it has tracks (`None`: the document is its own pose).
+    posed: Option<Document>,
+    /// Why the document could not be posed at `time` (a bad track), if it could not.
+    pose_error: Option<String>,
 }
 
 impl Default for SceneDocument {
@@ -52,7 +64,33 @@ impl SceneDocument {
             modified: false,
             next_gesture: 1,
             epoch: 0,
+            time: 0.0,
+            posed: None,
+            pose_error: None,
         }
+        .posed_again()
+    }
+
+    /// `self` with its pose computed.
+    fn posed_again(mut self) -> Self {
+        self.pose();
+        self
+    }
+
+    /// Recomputes the pose at the current time.
+    fn pose(&mut self) {
+        self.pose_error = None;
+        self.posed = if self.document.animation.is_static() {
+            None
+        } else {
+            match self.document.at(self.time) {
+                Ok(d) => Some(d),
+                Err(e) => {
+                    self.pose_error = Some(e.to_string());
+                    None
+                }
+            }
+        };
     }
 
     /// Replaces the document and its history (another file was opened, or saving rewrote
@@ -61,6 +99,8 @@ impl SceneDocument {
         self.document = document;
         self.history = history;
         self.epoch += 1;
+        let a = &self.document.animation;
+        self.time = a.frame_time(a.start as f32);
         self.changed();
     }
 
@@ -70,10 +110,51 @@ impl SceneDocument {
         self.epoch
     }
 
-    /// Moves the revision on and compares the live document with the saved one.
+    /// Moves the revision on, poses the document again and compares the live document
+    /// with the saved one.
     fn changed(&mut self) {
         self.revision += 1;
+        self.pose();
         self.modified = self.document != self.saved;
+    }
+
+    /// The document as shown at the current time: the pose when the document has tracks,
+    /// else the document itself. Views draw this and build their edits against it.
+    #[must_use]
+    pub fn shown(&self) -> &Document {
+        self.posed.as_ref().unwrap_or(&self.document)
+    }
+
+    /// The current time in seconds.
+    #[must_use]
+    pub fn time(&self) -> f32 {
+        self.time
+    }
+
+    /// The current frame at the timeline's rate (`time · fps`, rounded to the nearest frame).
+    #[must_use]
+    pub fn frame(&self) -> f32 {
+        (self.time * self.document.animation.fps).round()
+    }
+
+    /// Why the document cannot be posed at the current time (a track that does not fit its
+    /// channel), if it cannot; it is then shown with its base values.
+    #[must_use]
+    pub fn pose_error(&self) -> Option<&str> {
+        self.pose_error.as_deref()
+    }
+
+    /// Moves to time `t` seconds (non-finite times are ignored). The document is unchanged;
+    /// the revision moves on when the pose does, so that meshes re-evaluate.
+    pub fn set_time(&mut self, t: f32) {
+        if !t.is_finite() || t == self.time {
+            return;
+        }
+        self.time = t;
+        if !self.document.animation.is_static() {
+            self.revision += 1;
+            self.pose();
+        }
     }
 
     /// The live document.
@@ -115,14 +196,19 @@ impl SceneDocument {
         g
     }
 
-    /// Applies `op` and records it (merged into the previous step when `gesture` continues
-    /// it). On error nothing changes.
+    /// Applies `op`, an edit of the pose ([`SceneDocument::shown`]), and records it (merged
+    /// into the previous step when `gesture` continues it). On error nothing changes.
     pub fn apply(
         &mut self,
         op: Operation,
         label: impl Into<String>,
         gesture: Option<u64>,
     ) -> Result<()> {
+        let mut label = label.into();
+        if label.is_empty() {
+            label = op.describe();
+        }
+        let op = op.onto_base(&self.document, self.shown(), self.time)?;
         self.history
             .push(&mut self.document, op, label, now_ms(), gesture)?;
         self.changed();
@@ -186,6 +272,8 @@ pub enum DocumentCommand {
     Redo,
     /// Go to the state after step `n` of the history (0 = its base).
     Jump(usize),
+    /// Go to time `t` seconds (view state: not recorded in the history).
+    SetTime(f32),
 }
 
 impl DocumentCommand {
@@ -251,6 +339,10 @@ pub fn apply_document_commands(
                 .redo()
                 .map(|done| done.then_some(DocumentChange::Redone(cursor))),
             DocumentCommand::Jump(n) => doc.jump(n).map(|()| Some(DocumentChange::Jumped)),
+            DocumentCommand::SetTime(t) => {
+                doc.set_time(t);
+                Ok(None)
+            }
         };
         match result {
             Ok(change) => {
@@ -281,6 +373,49 @@ mod tests {
             kind: NodeKind::Group,
         };
         Operation::add_node(&Document::default(), node)
+    }
+
+    #[test]
+    fn the_document_is_shown_and_edited_at_the_current_time() -> Result<()> {
+        use ductile_scene::prelude::{Key, Value};
+        let mut d = Document::default();
+        Operation::add_node(&d, {
+            let Operation::AddNode { node, .. } = group("g") else {
+                unreachable!()
+            };
+            node
+        })
+        .apply(&mut d)?;
+        let keys = vec![
+            Key::new(0.0, Value::Vector(Vec3::ZERO)),
+            Key::new(1.0, Value::Vector(Vec3::X)),
+        ];
+        d.animation
+            .tracks
+            .entry("g".into())
+            .or_default()
+            .insert("transform.translation".into(), keys);
+        let mut doc = SceneDocument::new(d);
+        let r = doc.revision();
+        doc.set_time(0.5);
+        assert!(doc.revision() > r, "a new pose re-evaluates");
+        let at = |doc: &SceneDocument| doc.shown().node("g").unwrap().transform.translation;
+        assert_eq!(at(&doc), Vec3::new(0.5, 0.0, 0.0));
+        assert_eq!(
+            doc.document().node("g").unwrap().transform.translation,
+            Vec3::ZERO
+        );
+        // An edit of the pose keys the animated channel at 0.5 s, in one undo step.
+        let mut t = doc.shown().node("g").unwrap().transform;
+        t.translation = Vec3::Y;
+        doc.apply(Operation::set_transform(doc.shown(), "g", t)?, "", None)?;
+        assert_eq!(at(&doc), Vec3::Y);
+        doc.set_time(1.0);
+        assert_eq!(at(&doc), Vec3::X, "the key at 1 s is untouched");
+        assert!(doc.undo()?);
+        doc.set_time(0.5);
+        assert_eq!(at(&doc), Vec3::new(0.5, 0.0, 0.0));
+        Ok(())
     }
 
     #[test]

@@ -225,7 +225,7 @@ pub fn evaluate_meshes(
             let document = match &*shared {
                 Some((r, d)) if *r == revision => Arc::clone(d),
                 _ => {
-                    let d = Arc::new(doc.document().clone());
+                    let d = Arc::new(doc.shown().clone());
                     *shared = Some((revision, Arc::clone(&d)));
                     d
                 }
@@ -239,7 +239,7 @@ pub fn evaluate_meshes(
             ev.seen_revision = Some(revision);
         } else {
             let start = Instant::now();
-            let result = evaluator.update(doc.document()).map_err(|e| e.to_string());
+            let result = evaluator.update(doc.shown()).map_err(|e| e.to_string());
             let duration = start.elapsed();
             ev.evaluator = Some(evaluator);
             finish(

@@ -129,7 +129,7 @@ pub fn draw_gizmos(
         settings.unselected_macros,
     );
     if cache.key.as_ref() != Some(&key) {
-        cache.items = world_gizmos(doc.document(), &selection, settings.unselected_macros);
+        cache.items = world_gizmos(doc.shown(), &selection, settings.unselected_macros);
         cache.key = Some(key);
     }
     let eye = cameras.iter().next().map(GlobalTransform::translation);

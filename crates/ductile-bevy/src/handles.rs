@@ -143,7 +143,7 @@ pub fn sync_handles(
     }
     // With the overlays off (no gizmos), there are no handles either.
     let mut wanted: HashMap<(String, HandleId), (Vec3, bool)> = if gizmos.enabled {
-        wanted_handles(doc.document(), &selection)
+        wanted_handles(doc.shown(), &selection)
             .into_iter()
             .map(|(n, id, p, s)| ((n, id), (p, s)))
             .collect()
@@ -401,13 +401,13 @@ pub fn drag_handles(
             snap,
         ) {
             let op = if active.with.is_empty() {
-                handle_operation(doc.document(), &active.node, &active.id, target)
+                handle_operation(doc.shown(), &active.node, &active.id, target)
             } else {
                 let delta = target - active.start;
                 let moves: Vec<(HandleId, Vec3)> = std::iter::once((active.id, target))
                     .chain(active.with.iter().map(|(id, p)| (*id, *p + delta)))
                     .collect();
-                handles_operation(doc.document(), &active.node, &moves)
+                handles_operation(doc.shown(), &active.node, &moves)
             };
             match op {
                 Ok(op) => {

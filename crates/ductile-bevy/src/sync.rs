@@ -50,7 +50,7 @@ pub fn sync_document_entities(
     mut entities: ResMut<NodeEntities>,
     mut nodes: Query<(&mut SceneNode, &mut Transform)>,
 ) {
-    let document = doc.document();
+    let document = doc.shown();
     let mut seen: HashMap<String, Entity> = HashMap::with_capacity(document.nodes.len());
     for node in &document.nodes {
         let transform = document

@@ -15,6 +15,7 @@ pub mod edits;
 pub mod error;
 pub mod history;
 pub mod operation;
+pub mod pose;
 pub mod time_edits;
 mod time_ops;
 

@@ -659,6 +659,20 @@ impl Operation {
                 },
             ) => a == b && p == q && to == from,
             (O::SetTimeline { new, .. }, O::SetTimeline { old, .. }) => new == old,
+            (
+                O::SetTrack {
+                    node: a,
+                    param: p,
+                    new,
+                    ..
+                },
+                O::SetTrack {
+                    node: b,
+                    param: q,
+                    old,
+                    ..
+                },
+            ) => a == b && p == q && new == old,
             (O::Group { ops: a, .. }, O::Group { ops: b, .. }) => {
                 a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.can_merge(y))
             }
@@ -689,6 +703,7 @@ impl Operation {
             (O::SetKey { new, .. }, O::SetKey { new: n, .. }) => new.clone_from(n),
             (O::MoveKey { to, .. }, O::MoveKey { to: n, .. }) => *to = *n,
             (O::SetTimeline { new, .. }, O::SetTimeline { new: n, .. }) => *new = *n,
+            (O::SetTrack { new, .. }, O::SetTrack { new: n, .. }) => new.clone_from(n),
             (O::Group { ops, .. }, O::Group { ops: n, .. }) => {
                 for (a, b) in ops.iter_mut().zip(n) {
                     a.merge(b);

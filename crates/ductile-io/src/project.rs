@@ -33,13 +33,14 @@ use ductile_history::operation::Operation;
 use ductile_scene::document::{Document, MeshNode, Node, NodeKind};
 use thiserror::Error;
 
+use crate::bake::{BakeOptions, BakeReport, export_animation, export_variant_morphs};
 use crate::embedded;
 use crate::error::{IoError, Result};
 use crate::export::{ExportMesh, export_gltf};
 use crate::history_file::{LoadedHistory, SaveBase, history_to_string, is_history_text};
 use crate::history_file::{parse_history, read_history};
 use crate::mesh::{MeshFormat, MeshRef, load_rest_mesh, load_rest_mesh_from_bytes};
-use crate::scene::{parse_scene, scene_dir, scene_to_string};
+use crate::scene::{LoadedMesh, LoadedScene, parse_scene, scene_dir, scene_to_string};
 use crate::write_atomic;
 
 /// The suffix of a project's history file: `X.ron` keeps its history in `X.history.ron`.
@@ -436,6 +437,56 @@ impl Project {
             .map(|((name, rest), d)| ExportMesh::deformed(name, rest, d))
             .collect();
         export_gltf(path, &exports)
+    }
+
+    /// The document with the rest mesh of every mesh node loaded, as the bake and morph
+    /// exports ([`crate::bake`]) take a scene file.
+    pub fn loaded_scene(&mut self) -> Result<LoadedScene> {
+        let meshes = self.load_meshes()?;
+        let dir = self.source_dir.clone().unwrap_or_default();
+        let meshes = meshes
+            .into_iter()
+            .map(|(name, rest)| {
+                let source = self
+                    .document
+                    .mesh(&name)
+                    .map(|m| MeshRef::parse(&m.source).resolved(&dir))
+                    .map_err(|source| IoError::SceneProblem {
+                        path: self.origin.clone(),
+                        source,
+                    })?;
+                Ok(LoadedMesh {
+                    name,
+                    source,
+                    rest: (*rest).clone(),
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(LoadedScene {
+            path: self.origin.clone(),
+            document: self.document.clone(),
+            meshes,
+        })
+    }
+
+    /// Bakes the timeline and writes it to `path` as morph targets and a weights animation
+    /// ([`crate::bake::export_animation`], what `ductile export-anim` does).
+    pub fn export_animation(
+        &mut self,
+        path: impl AsRef<Path>,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<BakeReport> {
+        let scene = self.loaded_scene()?;
+        let options = BakeOptions::timeline(&scene.document);
+        export_animation(&scene, path.as_ref(), &options, progress)
+    }
+
+    /// Writes the rest meshes with one morph target per variant to `path`
+    /// ([`crate::bake::export_variant_morphs`], what `ductile export-morphs` does); returns
+    /// the targets' names.
+    pub fn export_variant_morphs(&mut self, path: impl AsRef<Path>) -> Result<Vec<String>> {
+        let scene = self.loaded_scene()?;
+        export_variant_morphs(&scene, path.as_ref())
     }
 
     /// Loads the mesh file at `path` (glTF or OBJ) and makes a mesh node for it, without

@@ -107,7 +107,7 @@ pub fn add_nodes(
     meshes: Query<(Entity, &SceneNode, &MeshEvaluation, &GlobalTransform)>,
 ) {
     for request in requests.read() {
-        let document = doc.document();
+        let document = doc.shown();
         if request.request == AddRequest::Group {
             let parent = selection.node.clone().filter(|n| document.node(n).is_ok());
             if let Ok((op, name)) = Operation::add_group(document, parent.as_deref(), "group") {

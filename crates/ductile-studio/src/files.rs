@@ -1,5 +1,6 @@
 //! File and edit actions (menus and shortcuts) and the file dialogs (egui-file-dialog, no
-//! GTK): New, Open, Save, Save As, Import mesh, Export glTF, Undo, Redo, Delete, Quit.
+//! GTK): New, Open, Save, Save As, Import mesh, Export glTF, Export animation, Export
+//! variants as morph targets, Undo, Redo, Delete, Quit.
 
 use std::path::PathBuf;
 
@@ -35,6 +36,14 @@ pub enum StudioAction {
     ExportGltf,
     /// Export the deformed meshes to this file.
     ExportPath(PathBuf),
+    /// Choose where to export the baked animation.
+    ExportAnimation,
+    /// Bake the timeline and write it to this file (morph targets and their weights).
+    ExportAnimationPath(PathBuf),
+    /// Choose where to export the variants as morph targets.
+    ExportMorphs,
+    /// Write the rest meshes with one morph target per variant to this file.
+    ExportMorphsPath(PathBuf),
     /// Undo the last step.
     Undo,
     /// Redo the next step.
@@ -60,6 +69,10 @@ pub enum DialogPurpose {
     Import,
     /// Export glTF.
     Export,
+    /// Export the baked animation.
+    ExportAnimation,
+    /// Export the variants as morph targets.
+    ExportMorphs,
 }
 
 /// The file dialog and the question about unsaved changes.
@@ -99,10 +112,23 @@ impl FileDialogs {
                 .add_save_extension("glTF binary (.glb)", "glb")
                 .default_save_extension("glTF binary (.glb)")
                 .default_file_name("deformed.glb"),
+            DialogPurpose::ExportAnimation => d
+                .title("Export the timeline as glTF morph targets and animation")
+                .add_save_extension("glTF binary (.glb)", "glb")
+                .default_save_extension("glTF binary (.glb)")
+                .default_file_name("animation.glb"),
+            DialogPurpose::ExportMorphs => d
+                .title("Export the variants as glTF morph targets")
+                .add_save_extension("glTF binary (.glb)", "glb")
+                .default_save_extension("glTF binary (.glb)")
+                .default_file_name("variants.glb"),
         };
         match purpose {
             DialogPurpose::Open | DialogPurpose::Import => d.pick_file(),
-            DialogPurpose::SaveAs | DialogPurpose::Export => d.save_file(),
+            DialogPurpose::SaveAs
+            | DialogPurpose::Export
+            | DialogPurpose::ExportAnimation
+            | DialogPurpose::ExportMorphs => d.save_file(),
         }
         self.dialog = Some((purpose, d));
     }
@@ -118,6 +144,8 @@ impl FileDialogs {
                     DialogPurpose::SaveAs => StudioAction::SaveAsPath(path),
                     DialogPurpose::Import => StudioAction::ImportPath(path),
                     DialogPurpose::Export => StudioAction::ExportPath(path),
+                    DialogPurpose::ExportAnimation => StudioAction::ExportAnimationPath(path),
+                    DialogPurpose::ExportMorphs => StudioAction::ExportMorphsPath(path),
                 });
                 self.dialog = None;
             } else if matches!(
@@ -264,7 +292,7 @@ pub fn run_actions(
                             rests.insert(m.source.clone(), (*imported.rest).clone());
                         }
                         selection.node = Some(imported.node.name.clone());
-                        let op = Operation::add_node(doc.document(), imported.node);
+                        let op = Operation::add_node(doc.shown(), imported.node);
                         edits.write(DocumentCommand::Apply {
                             op: Box::new(op),
                             label: format!("import {}", path.display()),
@@ -285,6 +313,39 @@ pub fn run_actions(
                     Err(e) => notice(Err(ductile_io::report(&e))),
                 }
             }
+            StudioAction::ExportAnimation => {
+                dialogs.open(DialogPurpose::ExportAnimation, project_dir);
+            }
+            StudioAction::ExportAnimationPath(path) => {
+                project
+                    .0
+                    .set_state(doc.document().clone(), doc.history().clone());
+                let start = std::time::Instant::now();
+                match project.0.export_animation(&path, &mut |_, _| {}) {
+                    Ok(report) => notice(Ok(format!(
+                        "exported {}: {} frames, {} morph targets, in {:.1} s",
+                        path.display(),
+                        report.samples.len(),
+                        report.targets.iter().map(|(_, n)| n).sum::<usize>(),
+                        start.elapsed().as_secs_f64()
+                    ))),
+                    Err(e) => notice(Err(ductile_io::report(&e))),
+                }
+            }
+            StudioAction::ExportMorphs => dialogs.open(DialogPurpose::ExportMorphs, project_dir),
+            StudioAction::ExportMorphsPath(path) => {
+                project
+                    .0
+                    .set_state(doc.document().clone(), doc.history().clone());
+                match project.0.export_variant_morphs(&path) {
+                    Ok(names) => notice(Ok(format!(
+                        "exported {}: morph targets {}",
+                        path.display(),
+                        names.join(", ")
+                    ))),
+                    Err(e) => notice(Err(ductile_io::report(&e))),
+                }
+            }
             StudioAction::Undo => {
                 edits.write(DocumentCommand::Undo);
             }
@@ -293,7 +354,7 @@ pub fn run_actions(
             }
             StudioAction::Delete => {
                 if let Some(name) = selection.node.clone() {
-                    match Operation::remove_node_and_references(doc.document(), &name) {
+                    match Operation::remove_node_and_references(doc.shown(), &name) {
                         Ok(op) => {
                             edits.write(DocumentCommand::Apply {
                                 op: Box::new(op),

@@ -317,7 +317,7 @@ pub fn sketch_input(
                 session.problem = Some(e.to_string());
                 return;
             }
-            let document = doc.document();
+            let document = doc.shown();
             let op = match &session.redraw {
                 Some(node) => Operation::set_tool(document, node, redrawn(document, node, tool))
                     .map(|op| (op, node.clone())),

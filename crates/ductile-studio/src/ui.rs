@@ -18,6 +18,8 @@ use crate::panels::menu_bar::{MenuAction, MenuBar, ViewOptions};
 use crate::panels::outliner::Outliner;
 use crate::panels::stack::StackPanel;
 use crate::panels::status_bar::{StatusBar, StatusInfo};
+use crate::panels::timeline::TimelinePanel;
+use crate::panels::variants::VariantsPanel;
 use crate::panels::{Gestures, PanelContext, PanelRequest};
 use crate::sketch::SketchState;
 use crate::studio::{Notices, OpenProject};
@@ -33,6 +35,8 @@ pub struct PanelState {
     macros: MacrosPanel,
     status: StatusBar,
     add_popup: AddPopup,
+    timeline: TimelinePanel,
+    variants: VariantsPanel,
     frame_ms: Option<f64>,
 }
 
@@ -49,7 +53,7 @@ pub struct UiInputs<'w, 's> {
     drag: Res<'w, DragState>,
     project: Res<'w, OpenProject>,
     time: Res<'w, Time>,
-    notices: Res<'w, Notices>,
+    notices: ResMut<'w, Notices>,
     box_select: Res<'w, crate::box_select::BoxSelect>,
     evaluations: Query<'w, 's, &'static MeshEvaluation>,
 }
@@ -67,6 +71,8 @@ pub struct UiOutputs<'w> {
 pub const LEFT_WIDTH: f32 = 360.0;
 /// The right panel's width at start (inspector, identikit), in logical pixels.
 pub const RIGHT_WIDTH: f32 = 440.0;
+/// The timeline's height at start, in logical pixels.
+pub const TIMELINE_HEIGHT: f32 = 120.0;
 
 /// A resizable side panel that keeps the width the user gives it (`width` at start):
 /// content wider than that scrolls sideways instead of widening the panel, so the viewport
@@ -105,7 +111,7 @@ fn paint_hint(painter: &egui::Painter, view: egui::Rect, hint: String) {
 #[allow(clippy::too_many_arguments)]
 pub fn studio_ui(
     mut contexts: EguiContexts,
-    inputs: UiInputs,
+    mut inputs: UiInputs,
     mut panels: ResMut<PanelState>,
     mut selection: ResMut<Selection>,
     mut gestures: ResMut<Gestures>,
@@ -145,7 +151,7 @@ pub fn studio_ui(
         now: inputs.time.elapsed_secs_f64(),
     };
     let has_selection = cx.selection.node.is_some();
-    let has_mesh = !inputs.doc.document().mesh_names().is_empty();
+    let has_mesh = !inputs.doc.shown().mesh_names().is_empty();
 
     let mut menu_action = None;
     let top = egui::Panel::top("menu-bar").show(&mut root, |ui| {
@@ -163,6 +169,12 @@ pub fn studio_ui(
     let bottom = egui::Panel::bottom("status-bar").show(&mut root, |ui| {
         panels.status.show(ui, &info);
     });
+    let timeline = egui::Panel::bottom("timeline")
+        .resizable(true)
+        .default_size(TIMELINE_HEIGHT)
+        .show(&mut root, |ui| {
+            panels.timeline.show(ui, &mut cx);
+        });
 
     let left = side_panel(
         egui::Panel::left("left-panel"),
@@ -190,7 +202,7 @@ pub fn studio_ui(
             // height it would have used.
             let has_macros = cx
                 .doc
-                .document()
+                .shown()
                 .nodes
                 .iter()
                 .any(|n| matches!(n.kind, ductile_scene::document::NodeKind::Macro(_)));
@@ -203,6 +215,10 @@ pub fn studio_ui(
                 .id_salt("inspector")
                 .max_height(height)
                 .show(ui, |ui| panels.inspector.show(ui, &mut cx));
+            ui.separator();
+            egui::CollapsingHeader::new(egui::RichText::new("Variants").heading())
+                .default_open(true)
+                .show(ui, |ui| panels.variants.show(ui, &mut cx));
             ui.separator();
             ui.heading("Identikit");
             panels.macros.show(ui, &mut cx);
@@ -233,7 +249,7 @@ pub fn studio_ui(
     for r in std::mem::take(&mut cx.requests) {
         match r {
             PanelRequest::RedrawSketch(node) => {
-                let doc = inputs.doc.document();
+                let doc = inputs.doc.shown();
                 let mesh = cx.selection.mesh_in_focus(doc);
                 let kind = match doc.node(&node).map(|n| &n.kind) {
                     Ok(ductile_scene::document::NodeKind::Tool(
@@ -251,6 +267,10 @@ pub fn studio_ui(
                     sketch.begin(&mesh, kind, Some(node));
                 }
             }
+            PanelRequest::Problem(text) => {
+                warn!("{text}");
+                inputs.notices.0.push(text);
+            }
         }
     }
     if let Some(MenuAction::Add(request)) = menu_action {
@@ -266,6 +286,8 @@ pub fn studio_ui(
             MenuAction::SaveAs => StudioAction::SaveAs,
             MenuAction::ImportMesh => StudioAction::ImportMesh,
             MenuAction::ExportGltf => StudioAction::ExportGltf,
+            MenuAction::ExportAnimation => StudioAction::ExportAnimation,
+            MenuAction::ExportMorphs => StudioAction::ExportMorphs,
             MenuAction::Quit => StudioAction::Quit,
             MenuAction::Undo => StudioAction::Undo,
             MenuAction::Redo => StudioAction::Redo,
@@ -278,7 +300,10 @@ pub fn studio_ui(
     // The free rectangle between the panels.
     let screen = ctx.viewport_rect();
     let min = egui::pos2(left.response.rect.right(), top.response.rect.bottom());
-    let max = egui::pos2(right.response.rect.left(), bottom.response.rect.top());
+    let max = egui::pos2(
+        right.response.rect.left(),
+        bottom.response.rect.top().min(timeline.response.rect.top()),
+    );
     let free = egui::Rect::from_min_max(min, max).intersect(screen);
     let wanted = (free.width() > 8.0 && free.height() > 8.0).then(|| {
         (
@@ -384,6 +409,7 @@ fn status_info(inputs: &UiInputs, frame_ms: Option<f64>) -> StatusInfo {
         .edit
         .last_error
         .clone()
+        .or_else(|| inputs.doc.pose_error().map(|e| format!("animation: {e}")))
         .or_else(|| {
             inputs
                 .stats

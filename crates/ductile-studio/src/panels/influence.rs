@@ -28,7 +28,7 @@ impl InfluenceEditor {
         mesh: &str,
         index: usize,
     ) {
-        let doc = cx.doc.document();
+        let doc = cx.doc.shown();
         let Ok(m) = doc.mesh(mesh) else { return };
         let Some(layer) = m.stack.get(index) else {
             return;
@@ -179,7 +179,7 @@ impl InfluenceEditor {
         shape: &Shape,
     ) {
         self.refusals.for_node(name);
-        let doc = cx.doc.document();
+        let doc = cx.doc.shown();
         let kinds = ["sphere", "box", "capsule", "tube"];
         let current = match shape {
             Shape::Sphere { .. } => 0,

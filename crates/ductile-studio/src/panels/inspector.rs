@@ -9,9 +9,10 @@ use ductile_history::operation::Operation;
 use ductile_scene::document::NodeKind;
 use ductile_scene::transform::Transform;
 
-use super::PanelContext;
 use super::influence::InfluenceEditor;
 use super::tool_editor::ToolEditor;
+use super::{KeyState, PanelContext};
+use ductile_bevy::prelude::SceneDocument;
 
 /// The inspector panel.
 #[derive(Debug, Default)]
@@ -24,7 +25,7 @@ pub struct Inspector {
 impl Inspector {
     /// Draws the selected node's properties.
     pub fn show(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>) {
-        let doc = cx.doc.document();
+        let doc = cx.doc.shown();
         if let Some((mesh, index)) = cx.selection.layer.clone() {
             self.influence.show_layer(ui, cx, &mesh, index);
             ui.separator();
@@ -55,6 +56,7 @@ impl Inspector {
             }
         });
         ui.label(format!("Kind: {}", node.kind.name()));
+        animated_channels(ui, cx.doc, &name);
         if let Some(parent) = &node.parent {
             ui.label(format!("Parent: {parent}"));
         }
@@ -102,7 +104,7 @@ impl Inspector {
         name: &str,
         t: Transform,
     ) {
-        let doc = cx.doc.document();
+        let doc = cx.doc.shown();
         let mut new = t;
         let mut responses = Vec::new();
         ui.label("Transform (parent frame)");
@@ -147,4 +149,29 @@ impl Inspector {
             cx.apply_in_gesture(r, op, format!("move '{name}'"));
         }
     }
+}
+
+/// One line per animated channel of `node`, coloured by its [`KeyState`] at the current
+/// frame: an edit of such a field keys it at this frame (see `docs/studio.md`, "Time").
+fn animated_channels(ui: &mut egui::Ui, doc: &SceneDocument, node: &str) {
+    let Some(tracks) = doc.document().animation.tracks.get(node) else {
+        return;
+    };
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Animated:");
+        for (path, keys) in tracks {
+            let state = KeyState::of(doc, node, path);
+            let text = match state {
+                KeyState::Keyed => format!("{path} (key here)"),
+                _ => format!("{path} ({} keys)", keys.len()),
+            };
+            let mut rich = egui::RichText::new(text);
+            if let Some(c) = state.color() {
+                rich = rich.color(c);
+            }
+            ui.label(rich).on_hover_text(
+                "Editing this field sets a key at the current frame (K keys every field)",
+            );
+        }
+    });
 }

@@ -6,7 +6,7 @@ use bevy_egui::egui;
 use ductile_history::operation::Operation;
 use ductile_scene::document::NodeKind;
 
-use super::PanelContext;
+use super::{KeyState, PanelContext};
 
 /// The macros panel.
 #[derive(Debug, Default)]
@@ -20,7 +20,7 @@ type MacroRow<'a> = (&'a str, &'a str, f32, (f32, f32));
 impl MacrosPanel {
     /// Draws the sliders.
     pub fn show(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>) {
-        let doc = cx.doc.document();
+        let doc = cx.doc.shown();
         let mut groups: BTreeMap<&str, Vec<MacroRow<'_>>> = BTreeMap::new();
         for node in &doc.nodes {
             if let NodeKind::Macro(m) = &node.kind {
@@ -78,9 +78,13 @@ impl MacrosPanel {
                         .show(ui, |ui| {
                             for (node, label, value, range) in visible {
                                 let mut v = *value;
+                                let mut text = egui::RichText::new(*label);
+                                if let Some(c) = KeyState::of(cx.doc, node, "value").color() {
+                                    text = text.color(c);
+                                }
                                 let r = ui.add(
                                     egui::Slider::new(&mut v, range.0..=range.1)
-                                        .text(*label)
+                                        .text(text)
                                         .fixed_decimals(2),
                                 );
                                 // Selected on release, not on press: the inspector above

@@ -23,6 +23,10 @@ pub enum MenuAction {
     ImportMesh,
     /// File ▸ Export glTF…
     ExportGltf,
+    /// File ▸ Export animation…
+    ExportAnimation,
+    /// File ▸ Export variants as morph targets…
+    ExportMorphs,
     /// File ▸ Quit.
     Quit,
     /// Edit ▸ Undo.
@@ -90,6 +94,13 @@ impl MenuBar {
                 ui.separator();
                 item(ui, "Import mesh…", "Ctrl+I", MenuAction::ImportMesh);
                 item(ui, "Export glTF…", "Ctrl+E", MenuAction::ExportGltf);
+                item(ui, "Export animation…", "", MenuAction::ExportAnimation);
+                item(
+                    ui,
+                    "Export variants as morph targets…",
+                    "",
+                    MenuAction::ExportMorphs,
+                );
                 ui.separator();
                 item(ui, "Quit", "Ctrl+Q", MenuAction::Quit);
             });

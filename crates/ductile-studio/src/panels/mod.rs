@@ -13,7 +13,9 @@ pub mod outliner;
 pub mod params;
 pub mod stack;
 pub mod status_bar;
+pub mod timeline;
 pub mod tool_editor;
+pub mod variants;
 
 #[cfg(test)]
 mod tests;
@@ -27,6 +29,44 @@ use ductile_history::operation::Operation;
 pub enum PanelRequest {
     /// Redraw the strokes of this sketch tool node in sketch mode.
     RedrawSketch(String),
+    /// Tell the user why an action could not be done (shown in the status bar).
+    Problem(String),
+}
+
+/// Whether a channel is animated, and keyed at the current time (the colours of keyed
+/// fields follow Blender: yellow on a key, green between keys).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum KeyState {
+    /// The channel has no track.
+    Static,
+    /// The channel has a track without a key at the current time.
+    Animated,
+    /// The channel has a key at the current time.
+    Keyed,
+}
+
+impl KeyState {
+    /// The state of channel `path` of node `node` at the document's current time.
+    #[must_use]
+    pub fn of(doc: &SceneDocument, node: &str, path: &str) -> Self {
+        let fps = doc.document().animation.fps;
+        let frame = doc.frame();
+        match doc.document().animation.track(node, path) {
+            None => Self::Static,
+            Some(keys) if keys.iter().any(|k| (k.time * fps).round() == frame) => Self::Keyed,
+            Some(_) => Self::Animated,
+        }
+    }
+
+    /// The colour a field's label takes, if any.
+    #[must_use]
+    pub fn color(self) -> Option<egui::Color32> {
+        match self {
+            Self::Static => None,
+            Self::Animated => Some(egui::Color32::from_rgb(120, 200, 110)),
+            Self::Keyed => Some(egui::Color32::from_rgb(235, 200, 70)),
+        }
+    }
 }
 
 /// What every panel may read and the edits it may ask for.

@@ -62,7 +62,7 @@ impl Outliner {
 
     /// Draws the tree.
     pub fn show(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>) {
-        let doc = cx.doc.document();
+        let doc = cx.doc.shown();
         ui.horizontal(|ui| {
             ui.add(
                 egui::TextEdit::singleline(&mut self.filter)

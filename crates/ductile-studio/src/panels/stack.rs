@@ -44,7 +44,7 @@ fn influence_summary(inf: Option<&InfluenceSpec>) -> String {
 impl StackPanel {
     /// Draws the stack of the mesh in focus.
     pub fn show(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>) {
-        let doc = cx.doc.document();
+        let doc = cx.doc.shown();
         let Some(mesh_name) = cx.selection.mesh_in_focus(doc) else {
             ui.weak("No mesh in the scene. File ▸ Import mesh… adds one.");
             return;
@@ -99,7 +99,7 @@ impl StackPanel {
         layer: &LayerSpec,
         count: usize,
     ) {
-        let doc = cx.doc.document();
+        let doc = cx.doc.shown();
         ui.dnd_drag_source(
             egui::Id::new(("layer-drag", mesh_name, i)),
             DraggedLayer(mesh_name.to_owned(), i),
@@ -192,7 +192,7 @@ impl StackPanel {
         mesh_name: &str,
         count: usize,
     ) {
-        let doc = cx.doc.document();
+        let doc = cx.doc.shown();
         let Ok(mesh) = doc.mesh(mesh_name) else {
             return;
         };

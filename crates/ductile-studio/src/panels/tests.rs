@@ -22,6 +22,8 @@ use super::history::HistoryPanel;
 use super::inspector::Inspector;
 use super::outliner::Outliner;
 use super::stack::StackPanel;
+use super::timeline::TimelinePanel;
+use super::variants::VariantsPanel;
 use super::{Gestures, PanelContext, PanelRequest};
 
 /// A mesh "m" with an FFSD tool "p" on its stack and a sphere volume "v".
@@ -113,6 +115,7 @@ impl<P> State<P> {
                     self.doc.redo().unwrap();
                 }
                 DocumentCommand::Jump(n) => self.doc.jump(n).unwrap(),
+                DocumentCommand::SetTime(t) => self.doc.set_time(t),
             }
         }
     }
@@ -403,4 +406,155 @@ fn a_sketch_tool_asks_for_its_strokes_to_be_redrawn() {
         h.state().requests,
         vec![PanelRequest::RedrawSketch("p".to_owned())]
     );
+}
+
+#[test]
+fn the_timeline_keys_the_selection_and_a_drag_moves_keys_in_one_step() {
+    let mut state = State::new(TimelinePanel::default());
+    state.selection.select(Some("v".to_owned()));
+    let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
+    h.run();
+    // K keys every channel of the selected node at the current frame (0), as one step.
+    h.get_by_label("Key 'v' (K)").click();
+    h.run();
+    let ops = h.state().ops();
+    let Some(Operation::Group { ops: keys, .. }) = ops.last() else {
+        panic!("{ops:?}")
+    };
+    let channels = h.state().doc.document().channels("v").unwrap().len();
+    assert_eq!(keys.len(), channels, "one key per channel");
+    h.state_mut().apply_commands();
+    assert_eq!(h.state().doc.history().len(), 1);
+    // Go to frame 12 and edit the radius in the pose: it is keyed there (auto-key).
+    h.state_mut().doc.set_time(0.5);
+    let posed = h.state().doc.shown().clone();
+    let op = Operation::set_volume(&posed, "v", Shape::Sphere { radius: 2.0 }).unwrap();
+    h.state_mut().doc.apply(op, "", None).unwrap();
+    let doc = h.state().doc.document().clone();
+    assert_eq!(
+        doc.node("v").unwrap().kind,
+        document().node("v").unwrap().kind,
+        "the base shape is unchanged"
+    );
+    let (path, _) = doc.channels("v").unwrap().last().unwrap().clone();
+    let track = doc.animation.track("v", &path).unwrap();
+    assert_eq!(track.len(), 2, "keys at frames 0 and 12: {track:?}");
+    // Drag the summary diamond of frame 12 to frame 20 (slowly, over several frames): one
+    // undo step moving every key of that frame.
+    h.run();
+    let from = h.state().panel.key_position(12.0, 0).unwrap();
+    let to = h.state().panel.key_position(20.0, 0).unwrap();
+    h.hover_at(from);
+    h.run();
+    h.drag_at(from);
+    h.run();
+    for k in 1..=8 {
+        h.hover_at(from + (to - from) * (k as f32 / 8.0));
+        h.run();
+        h.state_mut().apply_commands();
+    }
+    h.drop_at(to);
+    h.run();
+    h.state_mut().apply_commands();
+    assert_eq!(
+        h.state().doc.history().len(),
+        3,
+        "the drag is one step: {:#?}",
+        h.state().doc.history().entries()
+    );
+    let doc = h.state().doc.document();
+    let times: Vec<f32> = doc
+        .animation
+        .track("v", &path)
+        .unwrap()
+        .iter()
+        .map(|k| k.time)
+        .collect();
+    assert_eq!(times, vec![0.0, 20.0 / 24.0]);
+    assert_eq!(
+        h.state().panel.selected_keys().len(),
+        1,
+        "the moved key stays selected"
+    );
+    // Undo puts the key back at frame 12.
+    h.state_mut().doc.undo().unwrap();
+    let t = h
+        .state()
+        .doc
+        .document()
+        .animation
+        .track("v", &path)
+        .unwrap()[1]
+        .time;
+    assert_eq!(t, 0.5);
+}
+
+#[test]
+fn the_timeline_with_nothing_selected_keys_nothing_without_macros() {
+    let mut h = harness(State::new(TimelinePanel::default()), |p, ui, cx| {
+        p.show(ui, cx)
+    });
+    h.run();
+    h.get_by_label("Key every macro (K)").click();
+    h.run();
+    assert!(h.state().ops().is_empty());
+    assert!(
+        matches!(&h.state().requests[..], [PanelRequest::Problem(p)] if p.contains("select a node")),
+        "{:?}",
+        h.state().requests
+    );
+}
+
+#[test]
+fn the_variants_panel_saves_applies_and_deletes_variants() {
+    let mut h = harness(State::new(VariantsPanel::default()), |p, ui, cx| {
+        p.show(ui, cx)
+    });
+    h.run();
+    h.get_by_label("Save face").click();
+    h.run();
+    assert!(matches!(
+        h.state().ops()[..],
+        [Operation::SetVariant { .. }]
+    ));
+    h.state_mut().apply_commands();
+    assert!(h.state().doc.document().variants.contains_key("variant"));
+    // Move the FFSD point, save a second face, then apply the first: the point goes back.
+    let moved = |d: &Document| {
+        let Ok(NodeKind::Tool(Tool::Ffsd(f))) = d.node("p").map(|n| &n.kind) else {
+            panic!()
+        };
+        let mut f = f.clone();
+        f.points[0].gamma = 0.9;
+        Operation::set_tool(d, "p", Tool::Ffsd(f)).unwrap()
+    };
+    let op = moved(h.state().doc.shown());
+    h.state_mut().doc.apply(op, "", None).unwrap();
+    h.run();
+    h.get_by_label("Save face").click();
+    h.run();
+    h.state_mut().apply_commands();
+    assert_eq!(h.state().doc.document().variants.len(), 2);
+    h.get_all_by_label("Apply").next().unwrap().click();
+    h.run();
+    h.state_mut().apply_commands();
+    assert_eq!(
+        h.state().doc.document().node("p").unwrap().kind,
+        document().node("p").unwrap().kind,
+        "variant 'variant' restores the first face"
+    );
+    // The morph slider's blend halfway is a step too, and undo restores the face.
+    let doc = h.state().doc.document().clone();
+    let half = doc.blend_two("variant", "variant-2", 0.5).unwrap();
+    let op = Operation::apply_states(&doc, &half.states, "morph").unwrap();
+    h.state_mut().doc.apply(op, "", None).unwrap();
+    h.state_mut().doc.undo().unwrap();
+    assert_eq!(h.state().doc.document(), &doc);
+    // 🗑 deletes a variant in one step.
+    let before = h.state().doc.history().cursor();
+    h.get_all_by_label("🗑").next().unwrap().click();
+    h.run();
+    h.state_mut().apply_commands();
+    assert_eq!(h.state().doc.history().cursor(), before + 1);
+    assert_eq!(h.state().doc.document().variants.len(), 1);
 }

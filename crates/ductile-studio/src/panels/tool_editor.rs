@@ -120,7 +120,7 @@ impl ToolEditor {
             return;
         }
         self.refusals.accept(what);
-        let doc = cx.doc.document();
+        let doc = cx.doc.shown();
         let Ok(op) = Operation::set_tool(doc, name, new) else {
             return;
         };
