@@ -27,8 +27,8 @@ import zlib
 
 WIDTH, HEIGHT = 1280, 800
 # The 3-D view of the default layout (between the side panels, under the menu bar).
-VIEW = (365, 40, 835, 760)
-SLIDER = (916, 152)  # The handle of the first identikit slider at value 0.
+VIEW = (365, 40, 835, 705)
+SLIDER = (916, 227)  # The handle of the first identikit slider at value 0.
 
 
 def xwd_rgb(display):

@@ -7,6 +7,11 @@
 //! * `anim/limb/frame` — one frame of `scenes/animation-demo.ron` (MakeHuman's arm bent by
 //!   keyed sketch-bend targets, 13,380 welded vertices), after the first bind: the document
 //!   posed at the next frame and the mesh brought up to date. Target ≤ 20 ms per frame.
+//! * `anim/head-221k-30-keyed/frame` — one frame of Studio playback of that animation on
+//!   the head split 5×5 (221,052 welded vertices, as in the authoring benchmark): the
+//!   document posed at the next frame ([`Document::pose_at`], what the Studio's timeline
+//!   does) and the incremental evaluator brought up to date. Issue 16 asks that playback
+//!   keeps the display rate.
 //! * `variants/blend-two/…` — blending two suspects of `scenes/identikit-variants.ron` and
 //!   evaluating the head: `full` blends and runs a fresh `Document::evaluate` (what
 //!   `ductile blend` does), `scrub` moves an A/B slider: the blend written into a working copy
@@ -23,6 +28,8 @@ use ductile_anim::key::Key;
 use ductile_anim::value::Value;
 use ductile_io::LoadedScene;
 use ductile_io::bake::{BakeOptions, export_animation};
+use ductile_core::mesh::RestMesh;
+use ductile_core::primitives::subdivided_n;
 use ductile_scene::prelude::*;
 
 fn root() -> PathBuf {
@@ -86,6 +93,23 @@ fn anim(c: &mut Criterion) {
                 ev.update(&posed).expect("update");
             }
             black_box(ev.deformed().map(|d| d.positions.len()))
+        })
+    });
+
+    let big = RestMesh::new(subdivided_n(head.meshes[0].rest.mesh(), 5), "head split 5×5")
+        .expect("subdivided head");
+    let doc = &head.document;
+    let mut ev = MeshEvaluator::new("head", big);
+    let mut posed = doc.clone();
+    ev.update(&posed).expect("first bind");
+    let mut frame = 0;
+    c.bench_function("anim/head-221k-30-keyed/frame", |b| {
+        b.iter(|| {
+            frame = frame % 48 + 1;
+            posed
+                .pose_at(doc, frame as f32 / doc.animation.fps)
+                .expect("pose");
+            black_box(ev.update(&posed).expect("update"))
         })
     });
 
