@@ -18,7 +18,9 @@ use ductile_core::sketch::partition::Partition;
 use ductile_core::sketch::raycast::Bvh;
 use ductile_core::sketch::roi::partition_from_curve;
 use ductile_core::sketch::skin::{Polyline, skin};
-use ductile_core::sketch::stroke::{filter_stroke, joint_curve, project_stroke};
+use ductile_core::sketch::stroke::{
+    filter_stroke, joint_curve, project_stroke, project_target_stroke,
+};
 use ductile_core::sketch::tool::{Curve, SketchMode, SketchTool, Stroke};
 use ductile_core::tool::Tool;
 use glam::{Vec2, Vec3};
@@ -182,6 +184,71 @@ pub fn bend_tool(reference: Stroke, target: Stroke, partition: Option<Partition>
     }))
 }
 
+/// A bend tool whose curves are stored as 3-D points, so that its target is an animatable
+/// channel (`mode.target`, a curve in the sketch plane) — what the Studio makes.
+///
+/// `reference_curve` is the reference stroke projected on the mesh ([`reference_curve`],
+/// exactly what the bind would compute from the stroke, so the tool binds as
+/// [`bend_tool`]'s would); the sketch-plane normal is the direction towards the reference
+/// stroke's eye (as [`bend_tool`] leaves it implicit); the target stroke is placed on the
+/// plane as at evaluation time (§5.1) and resampled by arc length to as many points as the
+/// reference curve, so that keys of the target (and [`straight_target`]) interpolate
+/// skeleton-style instead of stepping.
+///
+/// # Errors
+/// A target stroke too short or not meeting the plane, a degenerate camera.
+pub fn bend_tool_on(
+    reference_curve: &[Vec3],
+    reference: &Stroke,
+    target: &Stroke,
+    partition: Option<Partition>,
+) -> Result<Tool> {
+    let normal = -reference.camera.forward();
+    if normal == Vec3::ZERO {
+        return Err(ductile_core::error::CoreError::Degenerate {
+            what: "reference stroke".to_owned(),
+            problem: "its camera looks nowhere (eye = target)".to_owned(),
+        });
+    }
+    let filtered = filter_stroke(&target.pixels)?;
+    let placed = project_target_stroke(&target.camera, &filtered, reference_curve)?;
+    let target = resampled(&placed, reference_curve.len())?;
+    Ok(Tool::Sketch(Box::new(SketchTool {
+        partition,
+        reference: Curve::Points(reference_curve.to_vec()),
+        normal: Some(normal),
+        mode: SketchMode::Bend {
+            target: Curve::Points(target),
+            turning: None,
+        },
+        scale: None,
+        smooth: true,
+        refine: None,
+    })))
+}
+
+/// `points` resampled to `n ≥ 2` points evenly spaced by arc length (the ends kept).
+///
+/// # Errors
+/// Fewer than two points, or a curve of zero length.
+pub fn resampled(points: &[Vec3], n: usize) -> Result<Vec<Vec3>> {
+    let line = Polyline::new(points, "target curve")?;
+    let n = n.max(2);
+    Ok((0..n)
+        .map(|i| line.point_at(i as f32 / (n - 1) as f32))
+        .collect())
+}
+
+/// The target of a bend tool whose reference is a 3-D curve that leaves the region
+/// undeformed: the reference itself (the rest pose an animator keys before a bend).
+#[must_use]
+pub fn straight_target(tool: &SketchTool) -> Option<Vec<Vec3>> {
+    match (&tool.reference, &tool.mode) {
+        (Curve::Points(p), SketchMode::Bend { .. }) => Some(p.clone()),
+        _ => None,
+    }
+}
+
 /// A twist tool about the joint curve of `reference`, by `angle` radians.
 #[must_use]
 pub fn twist_tool(reference: Stroke, angle: f32, partition: Option<Partition>) -> Tool {
@@ -295,6 +362,57 @@ mod tests {
         );
         let twist = twist_tool(reference, 1.0, None);
         twist.validate("twist").unwrap();
+    }
+
+    #[test]
+    fn a_bend_on_points_deforms_as_the_stroke_bend_and_its_target_is_keyable() {
+        let rest = tube();
+        let reference = stroke(&[(-1.0, 0.0), (2.0, 0.0)]);
+        let target = stroke(&[(-1.0, 0.0), (0.5, 0.0), (1.5, 1.0)]);
+        let run = |tool: Tool| {
+            ductile_core::stack::Stack {
+                layers: vec![ductile_core::stack::Layer::new("bend", tool)],
+            }
+            .evaluate_welded(&rest)
+            .unwrap()
+        };
+        let strokes = run(bend_tool(reference.clone(), target.clone(), None));
+        let curve = reference_curve(
+            SketchKind::Bend,
+            &reference,
+            rest.welded_positions(),
+            rest.topology(),
+        )
+        .unwrap();
+        let tool = bend_tool_on(&curve, &reference, &target, None).unwrap();
+        tool.validate("bend").unwrap();
+        let points = run(tool.clone());
+        // The same bend up to the target's resampling: well under the tube's radius (0.5).
+        let worst = strokes
+            .iter()
+            .zip(&points)
+            .map(|(a, b)| a.distance(*b))
+            .fold(0.0_f32, f32::max);
+        assert!(worst < 0.05, "largest difference {worst}");
+        let channels = ductile_anim::channel::tool_channels(&tool);
+        assert!(
+            channels.iter().any(|(p, _)| p == "mode.target"),
+            "{channels:?}"
+        );
+        // The straight target (the reference itself) leaves the mesh where it is.
+        let Tool::Sketch(mut s) = tool else { panic!() };
+        let straight = straight_target(&s).unwrap();
+        assert_eq!(straight.len(), curve.len());
+        if let SketchMode::Bend { target, .. } = &mut s.mode {
+            *target = Curve::Points(straight);
+        }
+        let still = run(Tool::Sketch(s));
+        let moved = still
+            .iter()
+            .zip(rest.welded_positions())
+            .map(|(a, b)| a.distance(*b))
+            .fold(0.0_f32, f32::max);
+        assert!(moved < 1e-4, "the straight target moved a vertex by {moved}");
     }
 
     #[test]

@@ -306,9 +306,19 @@ pub fn sketch_input(
                 .as_ref()
                 .filter(|p| p.partition.rigid.len() > 1)
                 .map(|p| p.partition.clone());
-            let tool = match session.kind {
-                SketchKind::Bend => sketching::bend_tool(reference, stroke, cut),
-                SketchKind::Twist => {
+            let tool = match (session.kind, &session.preview) {
+                // On the previewed reference curve: the target becomes a keyable channel.
+                (SketchKind::Bend, Some(p)) => {
+                    match sketching::bend_tool_on(&p.curve, &reference, &stroke, cut) {
+                        Ok(t) => t,
+                        Err(e) => {
+                            session.problem = Some(e.to_string());
+                            return;
+                        }
+                    }
+                }
+                (SketchKind::Bend, None) => sketching::bend_tool(reference, stroke, cut),
+                (SketchKind::Twist, _) => {
                     let angle = sketching::twist_angle(&reference.pixels, &stroke.pixels);
                     sketching::twist_tool(reference, angle, cut)
                 }

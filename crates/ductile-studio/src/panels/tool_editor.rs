@@ -181,9 +181,23 @@ fn structure(
                 cx.requests
                     .push(PanelRequest::RedrawSketch(name.to_owned()));
             }
+            let mut straightened = false;
+            if let Some(straight) = ductile_scene::sketching::straight_target(s)
+                && ui
+                    .button("Straight target (no bend)")
+                    .on_hover_text(
+                        "Sets the target curve to the reference: the region rests undeformed \
+                         (key it at the first frame, the bend at a later one)",
+                    )
+                    .clicked()
+                && let SketchMode::Bend { target, .. } = &mut s.mode
+            {
+                *target = Curve::Points(straight);
+                straightened = true;
+            }
             let (c, r) = sketch(ui, s);
             response = r;
-            c
+            c || straightened
         }
     };
     changed.then_some((t, response))
