@@ -26,8 +26,10 @@ passes; otherwise 1, naming the story and the step. Positions are those of the d
 1280x800 layout (left panel 360 px, right panel 440 px) and the scenes' default framing.
 """
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -40,8 +42,19 @@ ADD_MENU = (88, 11)
 MENU = {
     "Lattice (Bernstein)": (136, 201),
     "Sketch bend": (160, 273),
+    "Sketch twist": (160, 294),
     "Sphere volume": (127, 342),
 }
+FILE_MENU = (19, 11)
+# Rows of the File menu.
+FILE = {"Export animation": (73, 171)}
+# The timeline under the view: its first-frame button and the frame ruler (frames 0..48).
+TIMELINE_FIRST = (18, 727)
+
+
+def ruler(frame):
+    """Where a click on the timeline's ruler goes to `frame` (default range 0..48)."""
+    return (round(158 + frame / 48 * 1094), 745)
 # Shift+A opens the same menu at the cursor: the first entry's offset from the cursor.
 POPUP_FFSD = (60, 58)
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -54,8 +67,9 @@ class Failed(Exception):
 class Studio:
     """One Studio process on its own Xvfb display."""
 
-    def __init__(self, binary, out_dir, story, display, args=()):
+    def __init__(self, binary, out_dir, story, display, args=(), project=None):
         self.out_dir, self.story = out_dir, story
+        self.project = project
         self.display = display
         self.xvfb = subprocess.Popen(["Xvfb", self.display, "-screen", "0",
                                       f"{WIDTH}x{HEIGHT}x24"],
@@ -329,11 +343,223 @@ def story_sketch(studio):
     undo_check(studio, start, "4-arm-bent", "of the sketch")
 
 
+def bend_arm(studio):
+    """Sketch mode on MakeHuman's right arm: the reference stroke down the arm, the target
+    bent at the elbow (the strokes of the sketch story). Returns the shot after it."""
+    studio.click(*ADD_MENU)
+    studio.click(*MENU["Sketch bend"])
+    reference = [(694, 240), (705, 258), (716, 276), (731, 300), (746, 323)]
+    studio.drag(reference, steps=6)
+    time.sleep(3.0)
+    target = [(694, 240), (705, 258), (716, 276), (743, 272), (771, 268)]
+    studio.drag(target, steps=6)
+    return studio.shot("2-arm-bent", settle=4.0)
+
+
+def forearm_up(shot):
+    """Surface pixels where the bent forearm goes (few when the arm hangs straight)."""
+    return sum(1 for _, _, c in pixels(shot, (745, 245, 800, 275)) if is_mesh(c))
+
+
+def story_animate(studio):
+    """The character artist: a sketch bend on the arm keyed straight at frame 0 and bent at
+    24, a twist of the neck keyed 0° at frame 0 and drawn at 24, scrub, play, save, and
+    File ▸ Export animation."""
+    start = studio.shot("1-start", settle=15.0)
+    bent = bend_arm(studio)
+    expect(forearm_up(bent) > 300, "the target stroke did not bend the forearm")
+    # Frame 24: K keys the bend tool (selected after the sketch) as it is.
+    studio.click(*ruler(24))
+    studio.key("k")
+    keyed = studio.shot("3-bend-keyed-at-24")
+    x = ruler(24)[0]
+    diamond = [c for _, _, c in pixels(keyed, (x - 3, 763, x + 3, 769)) if min(c) > 180]
+    expect(len(diamond) > 10, "no key diamond at frame 24 on the timeline")
+    # Frame 0: the straight target (no bend), keyed there by editing it (an animated field).
+    studio.click(*TIMELINE_FIRST)
+    studio.click(925, 290)  # Inspector ▸ Straight target (no bend)
+    straight = studio.shot("4-straight-at-0", settle=3.0)
+    expect(forearm_up(straight) < 100, "at frame 0 the arm is not straight after "
+                                       "'Straight target'")
+    # The neck: a twist drawn at frame 24 (from the chest up, so the head turns), keyed.
+    studio.click(*ruler(24))
+    studio.click(*ADD_MENU)
+    studio.click(*MENU["Sketch twist"])
+    studio.drag([(604, 188), (604, 173), (604, 158), (604, 143), (604, 128)], steps=6)
+    time.sleep(3.0)
+    studio.drag([(640, 160), (643, 160), (646, 160)], steps=4)
+    twisted = studio.shot("5-neck-twisted-at-24", settle=4.0)
+    head = (560, 60, 660, 150)
+    expect(differing(bent, twisted, head) > 300, "the twist stroke did not turn the head")
+    studio.key("k")
+    # Frame 0: angle 0 typed into the inspector keys the rest of the twist.
+    studio.click(*TIMELINE_FIRST)
+    studio.click(935, 383)  # a click on the angle field selects its text for editing
+    studio.key("0")
+    studio.key("Return")
+    studio.key("Escape")  # nothing selected: no gizmos over the figure
+    rest = studio.shot("6-rest-at-0", settle=3.0)
+    expect(differing(start, rest, head) < 200, "at frame 0 the head is not back at rest")
+    expect(forearm_up(rest) < 100, "at frame 0 the arm is not straight")
+    # Frame 12 lies between the two poses; frame 24 is the drawn one.
+    studio.click(*ruler(12))
+    middle = studio.shot("7-frame-12", settle=3.0)
+    studio.click(*ruler(24))
+    end = studio.shot("8-frame-24", settle=3.0)
+    expect(forearm_up(end) > 300, "at frame 24 the forearm is not bent")
+    expect(differing(middle, rest) > 300 and differing(middle, end) > 300,
+           "frame 12 is not an in-between of frames 0 and 24")
+    # Play (Space) and pause.
+    studio.key("space")
+    a = studio.shot("9-playing", settle=0.5)
+    b = studio.shot("9-playing-later", settle=0.6)
+    studio.key("space")
+    expect(differing(a, b) > 100, "playback did not move the figure")
+    p1 = studio.shot("10-paused", settle=1.0)
+    p2 = studio.shot("10-paused-later", settle=1.0)
+    expect(differing(p1, p2) == 0, "the figure still moves after pausing")
+    # Save, then File ▸ Export animation… (Enter takes the suggested animation.glb).
+    studio.key("ctrl+s")
+    scene = studio.project
+    with open(scene) as f:
+        expect("mode.target" in f.read(), "the saved scene has no track of the bend's target")
+    studio.click(*FILE_MENU)
+    studio.click(*FILE["Export animation"])
+    time.sleep(2.0)
+    studio.key("Return")
+    out = os.path.join(os.path.dirname(scene), "animation.glb")
+    for _ in range(30):
+        if os.path.exists(out):
+            break
+        time.sleep(0.5)
+    studio.shot("11-exported", settle=1.0)
+    expect(os.path.exists(out), f"File > Export animation wrote no {out}")
+    with open(out, "rb") as f:
+        data = f.read()
+    expect(data[:4] == b"glTF" and b'"targets"' in data and b'"animations"' in data,
+           "the exported file is not a glTF with morph targets and an animation")
+    shutil.copy(out, os.path.join(studio.out_dir, "animate-animation.glb"))
+    shutil.copy(history_path(scene), os.path.join(studio.out_dir, "animate.history.ron"))
+    shutil.copy(scene, os.path.join(studio.out_dir, "animate.ron"))
+
+
+def story_identikit(studio):
+    """The forensic artist (the README's first command): a free FFSD point where no macro
+    reaches, two faces from the identikit sliders saved as variants A and B, then the A/B
+    morph: typed 0 and 1 it shows A and B exactly, dragged it passes between them, and one
+    Ctrl+Z undoes the drag."""
+    start = studio.shot("1-start", settle=20.0)
+    cursor = (600, 245)
+    studio.xdo("mousemove", *cursor)
+    time.sleep(0.5)
+    studio.key("shift+a")
+    studio.click(cursor[0] + POPUP_FFSD[0], cursor[1] + POPUP_FFSD[1])
+    point = studio.shot("2-free-point", settle=2.0)
+    expect(mesh_outline_change(start, point) > 100, "the free FFSD point did not change the head")
+    studio.key("Escape")
+    # Face A: brows up (the first identikit slider, dragged to its end).
+    studio.drag([(916, 227), (961, 227)], steps=6)
+    studio.key("Escape")  # the slider lets go of the keyboard
+    studio.key("Escape")  # nothing selected: no gizmos over the face
+    face_a = studio.shot("3-face-a")
+    expect(differing(point, face_a) > 300, "the brows slider did not change the head")
+    studio.click(*SAVE_FACE)
+    studio.shot("4-saved-a", settle=1.0)
+    studio.key("Escape")
+    # Face B: the chin longer too (its slider sits lower now that the variants panel lists A).
+    studio.drag([(916, 629), (871, 629)], steps=6)
+    studio.key("Escape")
+    studio.key("Escape")
+    face_b = studio.shot("5-face-b")
+    expect(differing(face_a, face_b) > 300, "the chin slider did not change the head")
+    studio.click(*SAVE_FACE)
+    studio.shot("6-saved-b", settle=1.0)
+    studio.key("Escape")
+    # The morph: A is 'variant', B 'variant-2'; its value field typed 0, then 1.
+    studio.click(*MORPH_VALUE)
+    studio.key("0")
+    studio.key("Return")
+    at_a = studio.shot("7-morph-0")
+    n = differing(face_a, at_a)
+    expect(n == 0, f"the morph at 0 differs from face A in {n} pixels")
+    studio.click(*MORPH_VALUE)
+    studio.key("1")
+    studio.key("Return")
+    at_b = studio.shot("8-morph-1")
+    n = differing(face_b, at_b)
+    expect(n == 0, f"the morph at 1 differs from face B in {n} pixels")
+    # Scrub: the slider's handle (at 1) dragged back half way towards A.
+    handle = (MORPH_SLIDER[0] + 17, MORPH_SLIDER[1])
+    studio.drag([handle, (handle[0] - 17, handle[1])], steps=6)
+    half = studio.shot("9-morph-dragged")
+    expect(differing(half, at_a) > 100 and differing(half, at_b) > 100,
+           "half way, the morph is not between A and B")
+    undo_check(studio, at_b, "9-morph-dragged", "of the morph drag")
+
+
+# The variants panel with nothing selected: Save face, and once two variants are listed, the
+# A/B morph slider (its handle at 0.5) and its value field.
+SAVE_FACE = (1045, 111)
+MORPH_SLIDER = (916, 196)
+MORPH_VALUE = (990, 196)
+
+
+def history_path(scene):
+    return scene[:-len(".ron")] + ".history.ron"
+
+
+def story_review(studio):
+    """The reviewer: opens the history the animation story saved and plays it step by step
+    (history panel): from the opened base to the last step, each step shown in the view."""
+    studio.shot("1-opened", settle=15.0)
+    studio.click(*ruler(24))
+    end = studio.shot("2-last-step-at-24", settle=3.0)
+    expect(forearm_up(end) > 300, "the opened history does not end with the bent arm")
+    studio.click(*HISTORY["first"])
+    base = studio.shot("3-base", settle=3.0)
+    expect(forearm_up(base) < 100 and differing(base, end) > 300,
+           "back at the history's base, the arm is still bent")
+    seen = [base]
+    for step in range(1, 8):
+        studio.click(*HISTORY["next"])
+        seen.append(studio.shot(f"4-step-{step}", settle=2.0))
+    expect(differing(seen[0], seen[1]) > 300, "the first step (the sketch bend) shows no "
+                                              "change")
+    expect(differing(seen[-1], end) == 0, "stepping through every step does not end where "
+                                          "the history ends")
+    # Play from the base: at two steps a second the whole history replays.
+    studio.click(*HISTORY["first"])
+    studio.click(*HISTORY["play"])
+    time.sleep(5.0)
+    played = studio.shot("5-played")
+    expect(differing(played, end) == 0, "playing the history did not end at its last step")
+
+
+# Where the history panel's buttons are with three nodes and two layers.
+HISTORY = {"first": (17, 312), "play": (74, 312), "next": (103, 312)}
+
+
+# name, Studio arguments, story, scene copied into a scratch project (the story may save it).
 STORIES = [
-    ("head", [], story_head),
-    ("spot", ["--scene", "scenes/spot.ron"], story_spot),
-    ("sketch", ["--scene", "scenes/makehuman-body.ron"], story_sketch),
+    ("head", [], story_head, None),
+    ("spot", ["--scene", "scenes/spot.ron"], story_spot, None),
+    ("sketch", ["--scene", "scenes/makehuman-body.ron"], story_sketch, None),
+    ("identikit", [], story_identikit, None),
+    ("animate", [], story_animate, "scenes/makehuman-body.ron"),
+    ("review", [], story_review, "animate"),
 ]
+
+
+def scratch_project(scene, scratch):
+    """A copy of `scene` in `scratch`/scenes, with `scratch`/assets linked to the repository's
+    assets so that its relative mesh paths still resolve; returns the copy's path."""
+    os.makedirs(os.path.join(scratch, "scenes"), exist_ok=True)
+    assets = os.path.join(scratch, "assets")
+    if not os.path.exists(assets):
+        os.symlink(os.path.join(ROOT, "assets"), assets)
+    copy = os.path.join(scratch, "scenes", os.path.basename(scene))
+    shutil.copy(os.path.join(ROOT, scene), copy)
+    return copy
 
 
 def main():
@@ -343,12 +569,23 @@ def main():
     only = set(sys.argv[3:])
     os.makedirs(out_dir, exist_ok=True)
     failures = []
-    for i, (name, args, story) in enumerate(STORIES):
+    scratch = tempfile.mkdtemp(prefix="ductile-stories-")
+    saved = {}  # story name -> the scene it saved
+    for i, (name, args, story, copy) in enumerate(STORIES):
         if only and name not in only:
             continue
         studio = None
         try:
-            studio = Studio(binary, out_dir, name, ":%d" % (40 + i), args)
+            project = None
+            if copy in saved:  # the history another story saved
+                project = history_path(saved[copy])
+            elif copy is not None:
+                project = scratch_project(copy, scratch)
+                saved[name] = project
+            if copy is not None and not os.path.exists(project):
+                raise Failed(f"{project} is missing (run the '{copy}' story first)")
+            extra = ["--scene", project] if project else []
+            studio = Studio(binary, out_dir, name, ":%d" % (40 + i), [*args, *extra], project)
             story(studio)
             print(f"ok: {name}")
         except Failed as e:
@@ -357,6 +594,7 @@ def main():
         finally:
             if studio is not None:
                 studio.close()
+    shutil.rmtree(scratch, ignore_errors=True)
     if failures:
         sys.exit(f"{len(failures)} of the stories failed: {', '.join(failures)} "
                  f"(screenshots in {out_dir})")

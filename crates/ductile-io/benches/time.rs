@@ -26,10 +26,10 @@ use std::path::{Path, PathBuf};
 use criterion::{Criterion, criterion_group, criterion_main};
 use ductile_anim::key::Key;
 use ductile_anim::value::Value;
-use ductile_io::LoadedScene;
-use ductile_io::bake::{BakeOptions, export_animation};
 use ductile_core::mesh::RestMesh;
 use ductile_core::primitives::subdivided_n;
+use ductile_io::LoadedScene;
+use ductile_io::bake::{BakeOptions, export_animation};
 use ductile_scene::prelude::*;
 
 fn root() -> PathBuf {
@@ -96,8 +96,11 @@ fn anim(c: &mut Criterion) {
         })
     });
 
-    let big = RestMesh::new(subdivided_n(head.meshes[0].rest.mesh(), 5), "head split 5×5")
-        .expect("subdivided head");
+    let big = RestMesh::new(
+        subdivided_n(head.meshes[0].rest.mesh(), 5),
+        "head split 5×5",
+    )
+    .expect("subdivided head");
     let doc = &head.document;
     let mut ev = MeshEvaluator::new("head", big);
     let mut posed = doc.clone();

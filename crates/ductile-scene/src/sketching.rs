@@ -412,7 +412,10 @@ mod tests {
             .zip(rest.welded_positions())
             .map(|(a, b)| a.distance(*b))
             .fold(0.0_f32, f32::max);
-        assert!(moved < 1e-4, "the straight target moved a vertex by {moved}");
+        assert!(
+            moved < 1e-4,
+            "the straight target moved a vertex by {moved}"
+        );
     }
 
     #[test]

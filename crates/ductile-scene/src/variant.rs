@@ -374,6 +374,13 @@ pub fn blend_states(sources: &[&NodeState], weights: &[f32]) -> Result<NodeState
     {
         return Ok(sources[k].clone());
     }
+    // Equal sources blend to themselves, bit for bit, whatever the weights (a weighted sum
+    // of equal values rounds differently when the weights are not 0 and 1), provided the
+    // weights are an affine combination.
+    if sources.windows(2).all(|w| w[0] == w[1]) && (weights.iter().sum::<f32>() - 1.0).abs() < 1e-6
+    {
+        return Ok(sources[0].clone());
+    }
     let transform = blend_transforms(sources, weights)?;
     let state = match sources[0].state {
         State::Macro(_) => {
@@ -548,6 +555,37 @@ mod tests {
             d.blend_two("A", "B", 1.0).unwrap().states,
             d.variants["B"].states
         );
+    }
+
+    #[test]
+    fn nodes_equal_in_both_variants_keep_their_state_bit_for_bit() {
+        let mut d = doc();
+        // The arm's curve is the same in A and B; an A/B slider must not touch it (its
+        // edits would otherwise differ from frame to frame and split a drag into steps).
+        let arm = d.variants["A"].states["arm"].clone();
+        d.variants
+            .get_mut("B")
+            .unwrap()
+            .states
+            .insert("arm".into(), arm.clone());
+        for v in ["A", "B"] {
+            d.variants
+                .get_mut(v)
+                .unwrap()
+                .states
+                .get_mut("right-ear")
+                .unwrap()
+                .state = State::Macro(0.3);
+        }
+        for t in [0.1_f32, 0.37, 0.7, 1.05, -0.4, 1.9] {
+            let blend = d.blend_two("A", "B", t).unwrap();
+            assert_eq!(blend.states["arm"], arm, "t = {t}");
+            assert_eq!(
+                blend.states["right-ear"].state,
+                State::Macro(0.3),
+                "t = {t}"
+            );
+        }
     }
 
     #[test]

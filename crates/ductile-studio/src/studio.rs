@@ -214,7 +214,7 @@ fn viewport_shortcuts(
 }
 
 /// Keyboard shortcuts (ignored while a text field has the keyboard). Escape clears the
-/// node selection (unless it cancels a sketch or a box selection).
+/// selection, node and layer (unless it cancels a sketch or a box selection).
 fn shortcuts(
     keys: Res<ButtonInput<KeyCode>>,
     keyboard: Res<KeyboardToViewport>,
@@ -231,9 +231,10 @@ fn shortcuts(
         && drag.active.is_none()
         && !sketch.active()
         && !box_select.armed
-        && selection.node.is_some()
+        && (selection.node.is_some() || selection.layer.is_some())
     {
         selection.select(None);
+        selection.layer = None;
     }
     // A modifier released in the same frame as the key still counts: at low frame rates
     // (software rendering) a quick Ctrl+Z arrives as press and release of both in one frame.

@@ -206,19 +206,27 @@ pub fn studio_ui(
                 .nodes
                 .iter()
                 .any(|n| matches!(n.kind, ductile_scene::document::NodeKind::Macro(_)));
+            let total = ui.available_height();
             let height = if has_macros {
-                ui.available_height() * 0.6
+                total * 0.45
             } else {
-                (ui.available_height() - 60.0).max(120.0)
+                (total * 0.7).max(120.0)
             };
             egui::ScrollArea::vertical()
                 .id_salt("inspector")
                 .max_height(height)
                 .show(ui, |ui| panels.inspector.show(ui, &mut cx));
             ui.separator();
+            // Every section scrolls within its share, so the panel never grows over the
+            // timeline.
             egui::CollapsingHeader::new(egui::RichText::new("Variants").heading())
                 .default_open(true)
-                .show(ui, |ui| panels.variants.show(ui, &mut cx));
+                .show(ui, |ui| {
+                    egui::ScrollArea::vertical()
+                        .id_salt("variants")
+                        .max_height(total * 0.25)
+                        .show(ui, |ui| panels.variants.show(ui, &mut cx));
+                });
             ui.separator();
             ui.heading("Identikit");
             panels.macros.show(ui, &mut cx);

@@ -58,7 +58,7 @@ impl Default for TimelinePanel {
         Self {
             playing: None,
             looping: true,
-            expanded: true,
+            expanded: false,
             selected: BTreeSet::new(),
             drag: None,
             layout: None,
@@ -433,8 +433,9 @@ impl TimelinePanel {
             rows.clear();
         }
         let label_w = 150.0;
-        let height = ROW * (2 + rows.len()) as f32;
-        let height = height.min(ui.available_height().max(ROW * 3.0));
+        // The summary row alone unless the channels are shown (at most eight rows): keying
+        // never changes the layout by itself.
+        let height = ROW * (2 + rows.len().min(8)) as f32;
         let (rect, response) = ui.allocate_exact_size(
             egui::vec2(ui.available_width(), height),
             egui::Sense::click_and_drag(),

@@ -197,12 +197,18 @@ impl VariantsPanel {
         {
             self.a = names.first().cloned();
         }
+        // B defaults to another variant than A as soon as there are two.
         if self
             .b
             .as_ref()
             .is_none_or(|b| !doc.variants.contains_key(b))
+            || (self.b == self.a && names.len() >= 2)
         {
-            self.b = names.get(1).or(names.first()).cloned();
+            self.b = names
+                .iter()
+                .find(|n| Some(*n) != self.a.as_ref())
+                .or(names.first())
+                .cloned();
         }
         ui.horizontal(|ui| {
             ui.label("Morph");
@@ -231,10 +237,10 @@ impl VariantsPanel {
             match doc
                 .blend_two(&a, &b, self.t)
                 .map_err(|e| e.to_string())
-                .and_then(|v| apply_op(doc, &v, &format!("morph '{a}' → '{b}'")))
+                .and_then(|v| apply_op(doc, &v, &format!("morph '{a}' to '{b}'")))
             {
                 Ok(op) => {
-                    cx.apply_in_gesture(&r, op, format!("morph '{a}' → '{b}' to {:.2}", self.t))
+                    cx.apply_in_gesture(&r, op, format!("morph '{a}' to '{b}' at {:.2}", self.t))
                 }
                 Err(e) => cx.requests.push(PanelRequest::Problem(e)),
             }
