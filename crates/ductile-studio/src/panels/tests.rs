@@ -410,10 +410,9 @@ fn a_sketch_tool_asks_for_its_strokes_to_be_redrawn() {
 
 #[test]
 fn the_timeline_keys_the_selection_and_a_drag_moves_keys_in_one_step() {
-    let mut state = State::new(TimelinePanel {
-        expanded: true,
-        ..TimelinePanel::default()
-    });
+    let mut panel = TimelinePanel::default();
+    panel.expanded = true;
+    let mut state = State::new(panel);
     state.selection.select(Some("v".to_owned()));
     let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
     h.run();
