@@ -7,6 +7,7 @@
 mod authoring;
 mod box_select;
 mod camera;
+mod compare;
 mod files;
 mod panels;
 mod screenshot;

@@ -72,6 +72,7 @@ impl Plugin for StudioPlugin {
         .init_resource::<crate::camera::FrameRequest>()
         .init_resource::<crate::sketch::SketchState>()
         .init_resource::<crate::box_select::BoxSelect>()
+        .init_resource::<crate::compare::Compare>()
         .add_message::<StudioAction>()
         .add_message::<crate::authoring::AddNode>()
         .add_systems(Startup, setup)
@@ -92,7 +93,12 @@ impl Plugin for StudioPlugin {
                 load_rest_meshes
                     .before(DuctileSystems::Evaluate)
                     .after(DuctileSystems::Sync),
-                (orbit_camera, frame_selected, frame_on_open)
+                (
+                    orbit_camera,
+                    frame_selected,
+                    frame_on_open,
+                    crate::compare::update_compare,
+                )
                     .chain()
                     .after(DuctileSystems::Evaluate),
                 (apply_viewport, draw_grid, apply_wireframe, window_title),

@@ -65,6 +65,7 @@ pub struct UiOutputs<'w> {
     actions: MessageWriter<'w, StudioAction>,
     adds: MessageWriter<'w, AddNode>,
     sketch: ResMut<'w, SketchState>,
+    compare: ResMut<'w, crate::compare::Compare>,
 }
 
 /// The left panel's width at start (outliner, stack, history), in logical pixels.
@@ -128,6 +129,7 @@ pub fn studio_ui(
         mut actions,
         mut adds,
         mut sketch,
+        mut compare,
     } = outputs;
     let ctx = contexts.ctx_mut()?.clone();
     let panels = &mut *panels;
@@ -224,7 +226,7 @@ pub fn studio_ui(
                 .show(ui, |ui| {
                     egui::ScrollArea::vertical()
                         .id_salt("variants")
-                        .max_height(total * 0.25)
+                        .max_height(total * 0.35)
                         .show(ui, |ui| panels.variants.show(ui, &mut cx));
                 });
             ui.separator();
@@ -275,6 +277,7 @@ pub fn studio_ui(
                     sketch.begin(&mesh, kind, Some(node));
                 }
             }
+            PanelRequest::Compare(entries) => compare.entries = entries,
             PanelRequest::Problem(text) => {
                 warn!("{text}");
                 inputs.notices.0.push(text);
@@ -321,6 +324,24 @@ pub fn studio_ui(
     });
     if viewport.0 != wanted {
         viewport.0 = wanted;
+    }
+    // Side by side: a label over each face.
+    if !compare.labels.is_empty() {
+        let painter = ctx
+            .layer_painter(egui::LayerId::new(
+                egui::Order::Foreground,
+                egui::Id::new("compare-labels"),
+            ))
+            .with_clip_rect(free);
+        for (text, at) in &compare.labels {
+            painter.text(
+                egui::pos2(at.x, at.y - 8.0),
+                egui::Align2::CENTER_BOTTOM,
+                text,
+                egui::FontId::proportional(15.0),
+                egui::Color32::WHITE,
+            );
+        }
     }
     // Sketch mode: the strokes and the hint over the 3-D view.
     if sketch.active() {

@@ -31,6 +31,8 @@ pub enum PanelRequest {
     RedrawSketch(String),
     /// Tell the user why an action could not be done (shown in the status bar).
     Problem(String),
+    /// Show these copies side by side with the mesh in focus (none: no comparison).
+    Compare(Vec<crate::compare::CompareEntry>),
 }
 
 /// Whether a channel is animated, and keyed at the current time (the colours of keyed

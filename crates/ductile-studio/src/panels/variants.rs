@@ -12,6 +12,7 @@ use ductile_scene::document::Document;
 use ductile_scene::variant::{RandomOptions, Variant};
 
 use super::{PanelContext, PanelRequest};
+use crate::compare::CompareEntry;
 
 /// The variants panel's state.
 #[derive(Debug)]
@@ -38,6 +39,8 @@ pub struct VariantsPanel {
     pub spread: f32,
     /// Largest left/right difference of a random face's macro pairs (`None`: as drawn).
     pub asymmetry: Option<f32>,
+    /// What is shown side by side with the current face.
+    pub compare: Vec<CompareEntry>,
 }
 
 impl Default for VariantsPanel {
@@ -54,6 +57,7 @@ impl Default for VariantsPanel {
             seed: 1,
             spread: 1.0,
             asymmetry: Some(0.1),
+            compare: Vec::new(),
         }
     }
 }
@@ -185,6 +189,35 @@ impl VariantsPanel {
         self.morph(ui, cx, &names);
         self.blend(ui, cx);
         self.random(ui, cx);
+        self.side_by_side(ui, cx, &names);
+    }
+
+    /// Which faces are shown next to the current one (view state, asked of the Studio).
+    fn side_by_side(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>, names: &[String]) {
+        let before = self.compare.clone();
+        self.compare.retain(|e| match e {
+            CompareEntry::Rest => true,
+            CompareEntry::Variant(v) => names.contains(v),
+        });
+        ui.horizontal_wrapped(|ui| {
+            ui.label("Side by side:");
+            let entries = std::iter::once(CompareEntry::Rest)
+                .chain(names.iter().cloned().map(CompareEntry::Variant));
+            for entry in entries {
+                let mut on = self.compare.contains(&entry);
+                if ui.checkbox(&mut on, entry.label()).changed() {
+                    if on {
+                        self.compare.push(entry);
+                    } else {
+                        self.compare.retain(|e| *e != entry);
+                    }
+                }
+            }
+        });
+        if self.compare != before {
+            cx.requests
+                .push(PanelRequest::Compare(self.compare.clone()));
+        }
     }
 
     /// The A/B morph slider.
