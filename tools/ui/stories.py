@@ -1,29 +1,35 @@
 #!/usr/bin/env python3
-"""Walks the Studio's authoring stories as a user would, under Xvfb with real X input.
+"""Walks the Studio's user stories as a user would, under Xvfb with real X input.
 
-Usage: stories.py STUDIO_BINARY OUT_DIR
+Usage: stories.py STUDIO_BINARY OUT_DIR [STORY ...]
 
 Needs what `drive.py` needs (Xvfb, xdotool, xwd, software Vulkan). Each story starts the
 Studio afresh in a 1280x800 window, works only with the mouse and the keyboard, checks every
-step on the pixels of the 3-D view, and undoes it with one Ctrl+Z (the view must come back
-pixel for pixel) before redoing it and going on:
+step on the pixels of the 3-D view, and undoes edits with one Ctrl+Z (the view must come back
+pixel for pixel) before redoing them and going on:
 
-1. head (the README's first command): Shift+A over the forehead ▸ FFSD control point — the
-   head changes and the point's handle sits where the cursor was; select the handle and drag
-   it up — the head follows; Ctrl+Z undoes the drag.
-2. Spot (`scenes/spot.ron`): Add ▸ Lattice (Bernstein) — a lattice fits the cow; drag its
-   top control point — the cow deforms; B and a rectangle over the lattice's top row —
-   several control points are selected, and dragging one moves them all; Add ▸ Sphere
-   volume — the new volume masks the lattice's layer, so the deformation changes; Ctrl+Z
-   after each.
-3. MakeHuman's body (`scenes/makehuman-body.ron`): Add ▸ Sketch bend, draw the reference stroke down the arm (the region of interest shows in the
-   paper's blue-to-red ramp of s(v), the hand beyond it as a rigid part), draw the target
-   stroke bent at the elbow — the forearm goes where it was drawn; Ctrl+Z undoes the whole
-   sketch.
+1. head (the README's first command): Shift+A over the forehead > FFSD control point, then
+   its handle dragged up.
+2. spot (`scenes/spot.ron`): Add > Lattice (Bernstein), a control point dragged, B and a
+   rectangle selecting the top row, dragged together; Add > Sphere volume masking the layer.
+3. sketch (`scenes/makehuman-body.ron`): Add > Sketch bend, the reference stroke down the arm
+   (the s(v) ramp and the rigid hand show), the target stroke bent at the elbow.
+4. technical (a scratch copy of Spot): lattice, shape surface and axial deformation, each
+   deformed by a handle drag; the stack reordered by dragging a row; a layer toggled off and
+   on; a sphere volume masking the lattice; Ctrl+S; `ductile apply` of the saved scene (the
+   CLI next to the Studio binary) writes OUT_DIR/technical-spot.glb.
+5. identikit (the head): a free point, faces A and B saved as variants, the morph typed to 0
+   and 1 (A and B pixel for pixel) and dragged between them.
+6. animate (a scratch copy of MakeHuman's body): a bend keyed straight at frame 0 and bent
+   at 24, a neck twist keyed, frame 12 in between, play and pause, Ctrl+S, File > Export
+   animation (copied to OUT_DIR/animate-animation.glb).
+7. review: the history the animate story saved, opened, stepped through and played.
 
 Screenshots of every step are written to OUT_DIR as PNG. Exits 0 only when every story
 passes; otherwise 1, naming the story and the step. Positions are those of the default
-1280x800 layout (left panel 360 px, right panel 440 px) and the scenes' default framing.
+1280x800 layout (left panel 360 px, right panel 440 px, timeline under the view) and the
+scenes' default framing. Scratch copies live in a temporary folder (its `assets` linked to
+the repository's), never in the repository.
 """
 import os
 import shutil
@@ -43,6 +49,8 @@ MENU = {
     "Lattice (Bernstein)": (136, 201),
     "Sketch bend": (160, 273),
     "Sketch twist": (160, 294),
+    "Shape surface": (124, 180),
+    "Axial deformation": (136, 117),
     "Sphere volume": (127, 342),
 }
 FILE_MENU = (19, 11)
@@ -69,6 +77,7 @@ class Studio:
 
     def __init__(self, binary, out_dir, story, display, args=(), project=None):
         self.out_dir, self.story = out_dir, story
+        self.binary = binary
         self.project = project
         self.display = display
         self.xvfb = subprocess.Popen(["Xvfb", self.display, "-screen", "0",
@@ -504,6 +513,74 @@ MORPH_SLIDER = (916, 196)
 MORPH_VALUE = (990, 196)
 
 
+def story_technical(studio):
+    """The technical artist on Spot: a lattice, a shape surface and an axial deformation
+    added and each deformed by dragging a handle; the stack reordered by dragging a row and a
+    layer toggled off and on; a sphere volume masking the lattice's layer; Ctrl+S; then
+    `ductile apply` of the saved scene from the command line."""
+    start = studio.shot("1-start", settle=15.0)
+    studio.click(*ADD_MENU)
+    studio.click(*MENU["Lattice (Bernstein)"])
+    added = studio.shot("2-lattice-added")
+    _, hx, hy = min(handles(added), key=lambda b: b[1] + b[2])
+    studio.drag([(round(hx), round(hy)), (round(hx) - 60, round(hy) - 50)])
+    lattice = studio.shot("3-lattice-dragged")
+    expect(mesh_outline_change(added, lattice) > 300, "the lattice drag did not deform Spot")
+    studio.click(*ADD_MENU)
+    studio.click(*MENU["Shape surface"])
+    added = studio.shot("4-surface-added")
+    expect(differing(lattice, added, (365, 40, 835, 705)) > 0, "no shape surface appeared")
+    # The surface's net spans the cow's long side; drag a middle point of its lower rows.
+    found = sorted(handles(added), key=lambda b: -b[2])
+    _, sx, sy = found[len(found) // 2]
+    studio.drag([(round(sx), round(sy)), (round(sx), round(sy) - 60)])
+    surface = studio.shot("5-surface-dragged")
+    expect(mesh_outline_change(added, surface) > 100, "the surface drag did not deform Spot")
+    studio.click(*ADD_MENU)
+    studio.click(*MENU["Axial deformation"])
+    added = studio.shot("6-axial-added")
+    _, ax, ay = max(handles(added), key=lambda b: b[1])  # the axis end at the tail
+    studio.drag([(round(ax), round(ay)), (round(ax), round(ay) - 70)])
+    axial = studio.shot("7-axial-dragged")
+    expect(mesh_outline_change(added, axial) > 100, "the axial drag did not deform Spot")
+    # Reorder: the axial row (third) dragged by its grip onto the first row.
+    studio.drag([STACK_GRIP[2], STACK_GRIP[0]], steps=6)
+    reordered = studio.shot("8-reordered")
+    expect(differing(axial, reordered) > 100, "moving the axial layer to the bottom of the "
+                                              "stack changed nothing")
+    undo_check(studio, axial, "8-reordered", "of the reorder")
+    # Toggle the (now second) lattice layer off, then on again.
+    studio.click(*STACK_ENABLE[1])
+    off = studio.shot("9-lattice-off")
+    expect(mesh_outline_change(reordered, off) > 300, "turning the lattice layer off changed "
+                                                      "nothing")
+    studio.click(*STACK_ENABLE[1])
+    on = studio.shot("10-lattice-on")
+    expect(differing(reordered, on) == 0, "turning the lattice layer on again does not "
+                                          "restore Spot")
+    # Mask: select the lattice's layer (its name in the stack), then Add > Sphere volume.
+    studio.click(*STACK_NAME[1])
+    studio.click(*ADD_MENU)
+    studio.click(*MENU["Sphere volume"])
+    masked = studio.shot("11-lattice-masked")
+    expect(mesh_outline_change(on, masked) > 100, "the sphere volume did not mask the "
+                                                  "lattice's layer")
+    studio.key("ctrl+s")
+    time.sleep(2.0)
+    cli = os.path.join(os.path.dirname(studio.binary), "ductile")
+    out = os.path.join(studio.out_dir, "technical-spot.glb")
+    run = subprocess.run([cli, "apply", studio.project, "-o", out], capture_output=True,
+                         text=True)
+    expect(run.returncode == 0 and os.path.exists(out),
+           f"ductile apply of the saved scene failed: {run.stderr.strip()}")
+
+
+# The stack panel's rows (three layers): the drag grip, the enable tick and the name.
+STACK_GRIP = [(14, 234), (14, 257), (14, 280)]
+STACK_ENABLE = [(35, 234), (35, 257), (35, 280)]
+STACK_NAME = [(98, 234), (98, 257), (98, 280)]
+
+
 def history_path(scene):
     return scene[:-len(".ron")] + ".history.ron"
 
@@ -552,6 +629,7 @@ STORIES = [
     ("head", [], story_head, None),
     ("spot", ["--scene", "scenes/spot.ron"], story_spot, None),
     ("sketch", ["--scene", "scenes/makehuman-body.ron"], story_sketch, None),
+    ("technical", [], story_technical, "scenes/spot.ron"),
     ("identikit", [], story_identikit, None),
     ("animate", [], story_animate, "scenes/makehuman-body.ron"),
     ("review", [], story_review, "animate"),
