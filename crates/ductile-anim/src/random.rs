@@ -53,9 +53,34 @@ pub fn random_weights(n: usize, seed: u64, spread: f32) -> Result<Vec<f32>> {
     Ok(out)
 }
 
+/// `n` seeded uniform numbers in `[−1, 1)` (the same ChaCha8 stream as [`random_weights`],
+/// each from the top 53 bits of a `u64`): a random face's slider positions, which
+/// the caller scales into each slider's range.
+#[must_use]
+pub fn random_unit_values(n: usize, seed: u64) -> Vec<f32> {
+    let mut bytes = [0_u8; 32];
+    bytes[..8].copy_from_slice(&seed.to_le_bytes());
+    let mut rng = ChaCha8Rng::from_seed(bytes);
+    (0..n)
+        .map(|_| {
+            let u = (rng.next_u64() >> 11) as f64 * (1.0 / (1_u64 << 53) as f64);
+            (2.0 * u - 1.0) as f32
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn unit_values_are_seeded_and_in_range() {
+        let a = random_unit_values(50, 9);
+        assert_eq!(a, random_unit_values(50, 9));
+        assert_ne!(a, random_unit_values(50, 10));
+        assert!(a.iter().all(|v| (-1.0..1.0).contains(v)));
+        assert!(a.iter().any(|v| *v < -0.5) && a.iter().any(|v| *v > 0.5));
+    }
 
     #[test]
     fn the_same_seed_gives_the_same_weights() {

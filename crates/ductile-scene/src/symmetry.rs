@@ -3,7 +3,8 @@
 //! a `left`/`right` word (separated by `-`, `_`, `.` or a space, any case: `left-ear`,
 //! `ear_Left`, `Right.brow`) or a Blender-style side suffix (`.L`/`.R`, `_L`/`_R`).
 
-use crate::document::{Document, NodeKind};
+use crate::document::{Document, MacroUse, NodeKind};
+use crate::error::{Result, SceneError};
 
 /// The name of the other side of `name`, or `None` when the name names no side.
 #[must_use]
@@ -86,6 +87,60 @@ pub fn mirror_pairs(doc: &Document) -> Vec<(String, String)> {
     out
 }
 
+impl Document {
+    /// A seeded random face (FaceGen's "random within limits"): every macro tool gets a
+    /// value drawn uniformly within `limit ∈ [0, 1]` of its slider range on each side of 0
+    /// (`u · limit · max` for `u ≥ 0`, `−u · limit · min` otherwise); with `symmetric`, the
+    /// second of a left/right pair takes the first one's value. Macro tools whose macro is
+    /// missing keep their value. Returns the new value of every macro tool, in document order.
+    ///
+    /// # Errors
+    /// `limit` outside `[0, 1]`.
+    pub fn random_macro_values(
+        &self,
+        seed: u64,
+        limit: f32,
+        symmetric: bool,
+    ) -> Result<Vec<(String, f32)>> {
+        if !(0.0..=1.0).contains(&limit) {
+            return Err(SceneError::NotFinite {
+                what: "random face limit (must lie in [0, 1])".to_owned(),
+                value: limit.to_string(),
+            });
+        }
+        let macros: Vec<(&str, &MacroUse)> = self
+            .nodes
+            .iter()
+            .filter_map(|n| match &n.kind {
+                NodeKind::Macro(m) => Some((n.name.as_str(), m)),
+                _ => None,
+            })
+            .collect();
+        let u = ductile_anim::random::random_unit_values(macros.len(), seed);
+        let mut out: Vec<(String, f32)> = Vec::with_capacity(macros.len());
+        for ((name, m), u) in macros.iter().zip(u) {
+            let value = match self.macros.get(&m.name) {
+                Some(def) if u >= 0.0 => u * limit * def.range.1.max(0.0),
+                Some(def) => -u * limit * def.range.0.min(0.0),
+                None => m.value,
+            };
+            out.push(((*name).to_owned(), value));
+        }
+        if symmetric {
+            let mut seen = std::collections::BTreeMap::new();
+            for (name, value) in &mut out {
+                match self.mirror_of(name).and_then(|m| seen.get(m)) {
+                    Some(v) => *value = *v,
+                    None => {
+                        seen.insert(name.clone(), *value);
+                    }
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -107,5 +162,47 @@ mod tests {
         assert_eq!(mirror_name("nose-length"), None);
         // Only whole words count.
         assert_eq!(mirror_name("leftover"), None);
+    }
+
+    #[test]
+    fn a_random_face_is_seeded_within_its_limits_and_symmetric_on_request() {
+        use crate::document::Node;
+        use crate::transform::Transform;
+        let node = |name: &str| Node {
+            name: name.into(),
+            parent: None,
+            transform: Transform::IDENTITY,
+            kind: NodeKind::Macro(MacroUse {
+                name: "m".into(),
+                value: 0.0,
+            }),
+        };
+        let mut d = Document {
+            nodes: ["left-ear", "right-ear", "nose", "chin", "jaw", "brow"]
+                .into_iter()
+                .map(node)
+                .collect(),
+            ..Document::default()
+        };
+        d.macros.insert(
+            "m".into(),
+            ductile_core::ffsd::FfsdMacro {
+                label: "m".into(),
+                group: String::new(),
+                area: None,
+                points: Vec::new(),
+                height: None,
+                range: (-2.0, 1.0),
+            },
+        );
+        let a = d.random_macro_values(5, 0.5, false).unwrap();
+        assert_eq!(a, d.random_macro_values(5, 0.5, false).unwrap(), "seeded");
+        assert_ne!(a, d.random_macro_values(6, 0.5, false).unwrap());
+        assert!(a.iter().all(|(_, v)| (-1.0..=0.5).contains(v)), "{a:?}");
+        assert_ne!(a[0].1, a[1].1);
+        let s = d.random_macro_values(5, 0.5, true).unwrap();
+        assert_eq!(s[0].1, s[1].1, "the right ear takes the left one's value");
+        assert_eq!(s[2..], a[2..], "unpaired sliders are as drawn");
+        assert!(d.random_macro_values(5, 1.5, false).is_err());
     }
 }

@@ -1,4 +1,7 @@
-//! The identikit panel: one slider per macro tool, grouped by the macro's group.
+//! The identikit panel: one slider per macro tool, grouped by the macro's group; a filter,
+//! "Reset all", a **Symmetric** toggle (a slider of a left/right pair moves its mirror too),
+//! "Reset" in each slider's context menu, and a seeded **random face** within a fraction of
+//! every slider's range (FaceGen's "random within limits").
 
 use std::collections::BTreeMap;
 
@@ -6,12 +9,53 @@ use bevy_egui::egui;
 use ductile_history::operation::Operation;
 use ductile_scene::document::NodeKind;
 
-use super::{KeyState, PanelContext};
+use super::{KeyState, PanelContext, PanelRequest};
+
+/// The operation that sets every macro tool to a seeded random value within `limit` of its
+/// range ([`ductile_scene::document::Document::random_macro_values`]), as one step.
+///
+/// # Errors
+/// `limit` outside `[0, 1]`.
+pub fn random_face(
+    doc: &ductile_scene::document::Document,
+    seed: u64,
+    limit: f32,
+    symmetric: bool,
+) -> Result<Operation, String> {
+    let values = doc
+        .random_macro_values(seed, limit, symmetric)
+        .map_err(|e| e.to_string())?;
+    let ops = values
+        .iter()
+        .filter_map(|(n, v)| Operation::set_macro_value(doc, n, *v).ok())
+        .collect();
+    Ok(Operation::Group {
+        label: format!("random face (seed {seed}, limit {limit})"),
+        ops,
+    })
+}
 
 /// The macros panel.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct MacrosPanel {
     filter: String,
+    /// Left/right pairs move together.
+    pub symmetric: bool,
+    /// Seed of the next random face.
+    pub seed: u64,
+    /// How far into each slider's range a random face may go, in [0, 1].
+    pub limit: f32,
+}
+
+impl Default for MacrosPanel {
+    fn default() -> Self {
+        Self {
+            filter: String::new(),
+            symmetric: false,
+            seed: 1,
+            limit: 0.5,
+        }
+    }
 }
 
 /// One slider: the macro node's name, the macro's label, its value and its range.
@@ -40,7 +84,32 @@ impl MacrosPanel {
         }
         ui.horizontal(|ui| {
             ui.label("Filter");
-            ui.text_edit_singleline(&mut self.filter);
+            ui.add(egui::TextEdit::singleline(&mut self.filter).desired_width(100.0));
+            ui.checkbox(&mut self.symmetric, "Symmetric")
+                .on_hover_text("A slider of a left/right pair moves its mirror too");
+            ui.menu_button("Random face", |ui| {
+                ui.horizontal(|ui| {
+                    ui.label("seed");
+                    ui.add(egui::DragValue::new(&mut self.seed).speed(1.0));
+                    ui.label("limit");
+                    ui.add(
+                        egui::DragValue::new(&mut self.limit)
+                            .range(0.0..=1.0)
+                            .speed(0.01),
+                    )
+                    .on_hover_text("How far into each slider's range the face may go");
+                });
+                if ui.button("Draw").clicked() {
+                    match random_face(doc, self.seed, self.limit, self.symmetric) {
+                        Ok(op) => {
+                            cx.apply(op);
+                            self.seed += 1;
+                        }
+                        Err(e) => cx.requests.push(PanelRequest::Problem(e)),
+                    }
+                    ui.close();
+                }
+            });
             if ui.button("Reset all").clicked() {
                 let ops: Vec<Operation> = groups
                     .values()
@@ -93,10 +162,30 @@ impl MacrosPanel {
                                 if r.clicked() || r.drag_stopped() {
                                     cx.selection.node = Some((*node).to_owned());
                                 }
+                                let set = |v: f32| {
+                                    if self.symmetric {
+                                        Operation::set_macro_value_symmetric(doc, node, v)
+                                    } else {
+                                        Operation::set_macro_value(doc, node, v)
+                                    }
+                                };
                                 if r.changed()
-                                    && let Ok(op) = Operation::set_macro_value(doc, node, v)
+                                    && let Ok(op) = set(v)
                                 {
                                     cx.apply_in_gesture(&r, op, format!("macro '{node}'"));
+                                }
+                                let mut reset = false;
+                                r.context_menu(|ui| {
+                                    if ui.button("Reset to 0").clicked() {
+                                        reset = true;
+                                        ui.close();
+                                    }
+                                });
+                                if reset
+                                    && *value != 0.0
+                                    && let Ok(op) = set(0.0)
+                                {
+                                    cx.apply(op);
                                 }
                             }
                         });

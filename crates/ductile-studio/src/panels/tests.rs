@@ -13,6 +13,7 @@ use ductile_core::tool::Tool;
 use ductile_history::operation::Operation;
 use ductile_scene::create::{LatticeKind, NewTool, Placement};
 use ductile_scene::document::{Document, LayerSpec, MeshNode, Node, NodeKind, VolumeNode};
+use ductile_scene::prelude::Value;
 use ductile_scene::transform::Transform;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
@@ -20,6 +21,7 @@ use egui_kittest::kittest::Queryable;
 use super::add_menu::{AddRequest, add_menu_contents};
 use super::history::HistoryPanel;
 use super::inspector::Inspector;
+use super::macros::{MacrosPanel, random_face};
 use super::outliner::Outliner;
 use super::stack::StackPanel;
 use super::timeline::TimelinePanel;
@@ -559,4 +561,93 @@ fn the_variants_panel_saves_applies_and_deletes_variants() {
     h.state_mut().apply_commands();
     assert_eq!(h.state().doc.history().cursor(), before + 1);
     assert_eq!(h.state().doc.document().variants.len(), 1);
+}
+
+/// Two macro tools "left-ear" and "right-ear" of one macro with range [−1, 1].
+fn ears() -> Document {
+    let node = |name: &str| Node {
+        name: name.into(),
+        parent: None,
+        transform: Transform::IDENTITY,
+        kind: NodeKind::Macro(ductile_scene::document::MacroUse {
+            name: "ear".into(),
+            value: 0.0,
+        }),
+    };
+    let mut d = Document {
+        nodes: vec![node("left-ear"), node("right-ear")],
+        ..Document::default()
+    };
+    d.macros.insert(
+        "ear".into(),
+        ductile_core::ffsd::FfsdMacro {
+            label: "Ear".into(),
+            group: "Ears".into(),
+            area: None,
+            points: vec![ControlPoint::basic(Vec3::ZERO, 0.1, 2.0, 0.1)],
+            height: None,
+            range: (-1.0, 1.0),
+        },
+    );
+    d
+}
+
+#[test]
+fn the_identikit_moves_both_sides_when_symmetric_and_draws_seeded_faces() {
+    let mut state = State::new(MacrosPanel::default());
+    state.doc = SceneDocument::new(ears());
+    let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
+    h.run();
+    h.get_by_label("Symmetric").click();
+    h.run();
+    assert!(h.state().panel.symmetric);
+    // Drag the first slider's value field to the right: both ears move, in one step.
+    let at = h
+        .get_all(egui_kittest::kittest::By::new().role(egui::accesskit::Role::SpinButton))
+        .next()
+        .unwrap()
+        .rect()
+        .center();
+    h.hover_at(at);
+    h.run();
+    h.drag_at(at);
+    h.run();
+    for k in 1..=10 {
+        h.hover_at(at + egui::vec2(4.0 * k as f32, 0.0));
+        h.run();
+        h.state_mut().apply_commands();
+    }
+    h.drop_at(at + egui::vec2(40.0, 0.0));
+    h.run();
+    h.state_mut().apply_commands();
+    assert_eq!(h.state().doc.history().len(), 1, "one step");
+    let Some(Operation::Group { ops: pair, .. }) = h
+        .state()
+        .doc
+        .history()
+        .entries()
+        .first()
+        .map(|e| e.op.clone())
+    else {
+        panic!("{:?}", h.state().doc.history().entries())
+    };
+    assert_eq!(pair.len(), 2, "both sides");
+    let doc = h.state().doc.document().clone();
+    let left = doc.channel("left-ear", "value").unwrap();
+    assert_ne!(left, Value::Scalar(0.0));
+    assert_eq!(doc.channel("right-ear", "value").unwrap(), left);
+    // A random face is one step, seeded, and keeps pairs equal when symmetric.
+    let doc = ears();
+    let a = random_face(&doc, 3, 0.8, true).unwrap();
+    assert_eq!(a, random_face(&doc, 3, 0.8, true).unwrap());
+    let mut face = doc.clone();
+    a.apply(&mut face).unwrap();
+    assert_eq!(
+        face.channel("left-ear", "value").unwrap(),
+        face.channel("right-ear", "value").unwrap()
+    );
+    assert_ne!(
+        face.channel("left-ear", "value").unwrap(),
+        Value::Scalar(0.0)
+    );
 }
