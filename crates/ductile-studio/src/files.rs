@@ -3,6 +3,7 @@
 //! variants as morph targets, Undo, Redo, Delete, Quit.
 
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use bevy::prelude::*;
 use bevy_egui::egui;
@@ -12,6 +13,56 @@ use ductile_io::project::Project;
 use egui_file_dialog::FileDialog;
 
 use crate::studio::{FramePending, Notices, OpenProject};
+
+/// An export running in the background (File ▸ Export animation or variants): the file, the
+/// samples done and to do, and the task that writes it (its result is the message shown).
+#[derive(Resource, Default)]
+pub struct ExportJob(pub Option<RunningExport>);
+
+/// See [`ExportJob`].
+pub struct RunningExport {
+    /// What is being written, for the status bar.
+    pub what: String,
+    /// Samples done and in all (both 0 until the bake reports).
+    pub progress: std::sync::Arc<(AtomicUsize, AtomicUsize)>,
+    task: bevy::tasks::Task<Result<String, String>>,
+}
+
+impl RunningExport {
+    /// The fraction done, in [0, 1].
+    #[must_use]
+    pub fn fraction(&self) -> f32 {
+        let (done, total) = (
+            self.progress.0.load(Ordering::Relaxed),
+            self.progress.1.load(Ordering::Relaxed),
+        );
+        if total == 0 {
+            0.0
+        } else {
+            done as f32 / total as f32
+        }
+    }
+}
+
+/// Collects a finished background export and tells the user what it wrote.
+pub fn poll_export(mut job: ResMut<ExportJob>, mut notices: ResMut<Notices>) {
+    let Some(running) = &mut job.0 else {
+        return;
+    };
+    if let Some(result) = bevy::tasks::futures::check_ready(&mut running.task) {
+        match result {
+            Ok(text) => {
+                info!("{text}");
+                notices.0.push(text);
+            }
+            Err(text) => {
+                error!("{text}");
+                notices.0.push(text);
+            }
+        }
+        job.0 = None;
+    }
+}
 
 /// Something the user asked for from a menu or a shortcut.
 #[derive(Message, Debug, Clone, PartialEq, Eq)]
@@ -191,6 +242,7 @@ pub fn run_actions(
     mut frame_selected: ResMut<crate::camera::FrameRequest>,
     mut edits: MessageWriter<DocumentCommand>,
     mut exit: MessageWriter<AppExit>,
+    mut export: ResMut<ExportJob>,
 ) {
     let actions: Vec<StudioAction> = actions.read().cloned().collect();
     for action in actions {
@@ -317,20 +369,49 @@ pub fn run_actions(
                 dialogs.open(DialogPurpose::ExportAnimation, project_dir);
             }
             StudioAction::ExportAnimationPath(path) => {
+                if export.0.is_some() {
+                    notice(Err("an export is still running; wait for it to finish".into()));
+                    continue;
+                }
                 project
                     .0
                     .set_state(doc.document().clone(), doc.history().clone());
-                let start = std::time::Instant::now();
-                match project.0.export_animation(&path, &mut |_, _| {}) {
-                    Ok(report) => notice(Ok(format!(
-                        "exported {}: {} frames, {} morph targets, in {:.1} s",
-                        path.display(),
-                        report.samples.len(),
-                        report.targets.iter().map(|(_, n)| n).sum::<usize>(),
-                        start.elapsed().as_secs_f64()
-                    ))),
-                    Err(e) => notice(Err(ductile_io::report(&e))),
-                }
+                // The meshes are loaded here (cached); the bake runs in the background with
+                // its progress in the status bar.
+                let scene = match project.0.loaded_scene() {
+                    Ok(s) => s,
+                    Err(e) => {
+                        notice(Err(ductile_io::report(&e)));
+                        continue;
+                    }
+                };
+                let progress = std::sync::Arc::new((AtomicUsize::new(0), AtomicUsize::new(0)));
+                let shared = std::sync::Arc::clone(&progress);
+                let out = path.clone();
+                let task = bevy::tasks::AsyncComputeTaskPool::get().spawn(async move {
+                    let start = std::time::Instant::now();
+                    let options = ductile_io::bake::BakeOptions::timeline(&scene.document);
+                    let mut report = |done: usize, total: usize| {
+                        shared.0.store(done, Ordering::Relaxed);
+                        shared.1.store(total, Ordering::Relaxed);
+                    };
+                    ductile_io::bake::export_animation(&scene, &out, &options, &mut report)
+                        .map(|report| {
+                            format!(
+                                "exported {}: {} frames, {} morph targets, in {:.1} s",
+                                out.display(),
+                                report.samples.len(),
+                                report.targets.iter().map(|(_, n)| n).sum::<usize>(),
+                                start.elapsed().as_secs_f64()
+                            )
+                        })
+                        .map_err(|e| ductile_io::report(&e))
+                });
+                export.0 = Some(RunningExport {
+                    what: format!("exporting {}", path.display()),
+                    progress,
+                    task,
+                });
             }
             StudioAction::ExportMorphs => dialogs.open(DialogPurpose::ExportMorphs, project_dir),
             StudioAction::ExportMorphsPath(path) => {

@@ -73,6 +73,7 @@ impl Plugin for StudioPlugin {
         .init_resource::<crate::sketch::SketchState>()
         .init_resource::<crate::box_select::BoxSelect>()
         .init_resource::<crate::compare::Compare>()
+        .init_resource::<crate::files::ExportJob>()
         .add_message::<StudioAction>()
         .add_message::<crate::authoring::AddNode>()
         .add_systems(Startup, setup)
@@ -90,6 +91,7 @@ impl Plugin for StudioPlugin {
                 )
                     .chain()
                     .before(DuctileSystems::Input),
+                crate::files::poll_export,
                 load_rest_meshes
                     .before(DuctileSystems::Evaluate)
                     .after(DuctileSystems::Sync),

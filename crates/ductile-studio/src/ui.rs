@@ -55,6 +55,7 @@ pub struct UiInputs<'w, 's> {
     time: Res<'w, Time>,
     notices: ResMut<'w, Notices>,
     box_select: Res<'w, crate::box_select::BoxSelect>,
+    export: Res<'w, crate::files::ExportJob>,
     evaluations: Query<'w, 's, &'static MeshEvaluation>,
 }
 
@@ -468,5 +469,10 @@ fn status_info(inputs: &UiInputs, frame_ms: Option<f64>) -> StatusInfo {
         error,
         file: inputs.project.0.display_name(),
         modified: inputs.doc.is_modified(),
+        export: inputs
+            .export
+            .0
+            .as_ref()
+            .map(|j| (j.what.clone(), j.fraction())),
     }
 }

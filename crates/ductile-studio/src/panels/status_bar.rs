@@ -24,6 +24,8 @@ pub struct StatusInfo {
     pub file: String,
     /// Unsaved changes.
     pub modified: bool,
+    /// A background export: what it writes and the fraction done.
+    pub export: Option<(String, f32)>,
 }
 
 /// The status bar panel.
@@ -62,6 +64,15 @@ impl StatusBar {
             if let Some(axis) = info.drag {
                 ui.separator();
                 ui.label(format!("drag: {axis} (X/Y/Z constrain, Ctrl snaps)"));
+            }
+            if let Some((what, done)) = &info.export {
+                ui.separator();
+                ui.add(
+                    egui::ProgressBar::new(*done)
+                        .desired_width(160.0)
+                        .show_percentage()
+                        .text(what.as_str()),
+                );
             }
             if let Some(e) = &info.error {
                 ui.separator();
