@@ -370,7 +370,9 @@ pub fn run_actions(
             }
             StudioAction::ExportAnimationPath(path) => {
                 if export.0.is_some() {
-                    notice(Err("an export is still running; wait for it to finish".into()));
+                    notice(Err(
+                        "an export is still running; wait for it to finish".into()
+                    ));
                     continue;
                 }
                 project

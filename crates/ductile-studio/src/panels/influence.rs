@@ -9,9 +9,9 @@ use ductile_core::spline::SplineControl;
 use ductile_history::operation::Operation;
 use ductile_scene::document::{InfluenceSpec, NodeKind};
 
-use super::PanelContext;
 use super::curve_editor::curve_editor;
 use super::params::{REFUSED, Refusals, parameter_list};
+use super::{KeyState, PanelContext};
 
 /// The influence and volume sections' state.
 #[derive(Debug, Default)]
@@ -220,8 +220,15 @@ impl InfluenceEditor {
             return;
         }
         let channels = shape_channels(shape);
-        if let Some(edit) = parameter_list(ui, &format!("volume-{name}"), &channels, &self.refusals)
-        {
+        let scene = cx.doc;
+        let keyed = |path: &str| KeyState::of(scene, name, path);
+        if let Some(edit) = parameter_list(
+            ui,
+            &format!("volume-{name}"),
+            &channels,
+            &self.refusals,
+            &keyed,
+        ) {
             let mut new = shape.clone();
             let result = set_shape_channel(&mut new, &edit.path, &edit.value)
                 .map_err(|e| e.to_string())

@@ -324,6 +324,7 @@ pub fn parameter_list(
     id: &str,
     channels: &[(String, Value)],
     refusals: &Refusals,
+    keyed: &dyn Fn(&str) -> super::KeyState,
 ) -> Option<ParamEdit> {
     let mut edit = None;
     let groups = grouped(channels);
@@ -336,7 +337,17 @@ pub fn parameter_list(
                 .show(ui, |ui| {
                     for (path, value) in items {
                         let m = meta(path);
-                        ui.label(leaf(path)).on_hover_text(m.hint);
+                        // Animated fields are coloured as in Blender (yellow on a key,
+                        // green between keys); editing one keys it at the current frame.
+                        let state = keyed(path);
+                        let mut label = egui::RichText::new(leaf(path));
+                        if let Some(c) = state.color() {
+                            label = label.color(c);
+                        }
+                        let r = ui.label(label).on_hover_text(m.hint);
+                        if state != super::KeyState::Static {
+                            r.on_hover_text("animated: an edit sets a key at this frame");
+                        }
                         ui.vertical(|ui| {
                             let wid = egui::Id::new((id, path));
                             if let Some((value, response)) = value_widget(ui, wid, value, m) {
