@@ -9,7 +9,7 @@ use bevy_egui::egui;
 use ductile_history::operation::Operation;
 use ductile_scene::document::NodeKind;
 
-use super::{KeyState, PanelContext, PanelRequest};
+use super::{KeyState, PanelContext, PanelRequest, hover_channel};
 
 /// The operation that sets every macro tool to a seeded random value within `limit` of its
 /// range ([`ductile_scene::document::Document::random_macro_values`]), as one step.
@@ -159,6 +159,9 @@ impl MacrosPanel {
                                 // Selected on release, not on press: the inspector above
                                 // grows when a macro is selected, and the slider must not
                                 // move under the pointer while it is dragged.
+                                if r.hovered() {
+                                    hover_channel(ui.ctx(), node, "value");
+                                }
                                 if r.clicked() || r.drag_stopped() {
                                     cx.selection.node = Some((*node).to_owned());
                                 }

@@ -71,6 +71,23 @@ impl KeyState {
     }
 }
 
+/// Remembers that the pointer is over the field of channel `path` of node `node` this frame,
+/// so that K keys that channel alone (read by the timeline the next frame; see
+/// [`take_hovered_channel`]).
+pub fn hover_channel(ctx: &egui::Context, node: &str, path: &str) {
+    ctx.data_mut(|d| {
+        d.insert_temp(
+            egui::Id::new("hovered-channel"),
+            (node.to_owned(), path.to_owned()),
+        );
+    });
+}
+
+/// The channel whose field the pointer was over in the last frame, if any (and forgets it).
+pub fn take_hovered_channel(ctx: &egui::Context) -> Option<(String, String)> {
+    ctx.data_mut(|d| d.remove_temp::<(String, String)>(egui::Id::new("hovered-channel")))
+}
+
 /// What every panel may read and the edits it may ask for.
 pub struct PanelContext<'a> {
     /// The document (read only).

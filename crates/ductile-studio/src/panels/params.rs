@@ -325,6 +325,7 @@ pub fn parameter_list(
     channels: &[(String, Value)],
     refusals: &Refusals,
     keyed: &dyn Fn(&str) -> super::KeyState,
+    hovered: &mut dyn FnMut(&str),
 ) -> Option<ParamEdit> {
     let mut edit = None;
     let groups = grouped(channels);
@@ -345,10 +346,11 @@ pub fn parameter_list(
                             label = label.color(c);
                         }
                         let r = ui.label(label).on_hover_text(m.hint);
+                        let mut over = r.hovered();
                         if state != super::KeyState::Static {
                             r.on_hover_text("animated: an edit sets a key at this frame");
                         }
-                        ui.vertical(|ui| {
+                        let inner = ui.vertical(|ui| {
                             let wid = egui::Id::new((id, path));
                             if let Some((value, response)) = value_widget(ui, wid, value, m) {
                                 edit = Some(ParamEdit {
@@ -361,6 +363,10 @@ pub fn parameter_list(
                                 ui.colored_label(REFUSED, format!("refused: {reason}"));
                             }
                         });
+                        over |= inner.response.contains_pointer();
+                        if over {
+                            hovered(path);
+                        }
                         ui.end_row();
                     }
                 });

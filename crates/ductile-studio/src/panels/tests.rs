@@ -651,3 +651,24 @@ fn the_identikit_moves_both_sides_when_symmetric_and_draws_seeded_faces() {
         Value::Scalar(0.0)
     );
 }
+
+#[test]
+fn k_over_a_field_keys_that_channel_alone() {
+    let mut state = State::new(TimelinePanel::default());
+    state.selection.select(Some("v".to_owned()));
+    let path = document().channels("v").unwrap().last().unwrap().0.clone();
+    let hovered = path.clone();
+    // The inspector marks the field under the pointer every frame; the timeline reads it.
+    let mut h = harness(state, move |p, ui, cx| {
+        super::hover_channel(ui.ctx(), "v", &hovered);
+        p.show(ui, cx);
+    });
+    h.run();
+    h.key_press(egui::Key::K);
+    h.run();
+    let ops = h.state().ops();
+    assert!(
+        matches!(&ops[..], [Operation::SetKey { node, param, .. }] if node == "v" && *param == path),
+        "{ops:?}"
+    );
+}

@@ -2,8 +2,9 @@
 //! the previous or next key, and the keys of the selected node as diamonds — a summary row
 //! and one row per animated channel — that can be selected (click, Shift-click, box), moved
 //! by dragging (one undo step per drag), given an interpolation or deleted from their
-//! context menu. **K** keys what the inspector shows: every channel of the selected node, or
-//! with nothing selected every macro tool's value (the identikit face).
+//! context menu. **K** keys what the inspector shows: the field under the pointer (an
+//! inspector field or an identikit slider), else every channel of the selected node, or with
+//! nothing selected every macro tool's value (the identikit face).
 //!
 //! Times are seconds in the document and whole frames here (`frame = time · fps`).
 
@@ -319,10 +320,18 @@ impl TimelinePanel {
             }
             ui.checkbox(&mut self.expanded, "Channels");
         });
-        // Shortcuts over the whole window, unless a text field is being typed in.
+        // Shortcuts over the whole window, unless a text field is being typed in. K over a
+        // field (inspector, identikit slider) keys that channel alone.
+        let hovered = super::take_hovered_channel(ui.ctx());
         if !ui.ctx().egui_wants_keyboard_input() {
             if ui.input(|i| i.key_pressed(egui::Key::K) && i.modifiers.is_none()) {
-                self.key(cx, node.as_deref(), time);
+                match hovered {
+                    Some((n, path)) => match Operation::key_current(doc, &n, &path, time) {
+                        Ok(op) => cx.apply(op),
+                        Err(e) => cx.requests.push(PanelRequest::Problem(e.to_string())),
+                    },
+                    None => self.key(cx, node.as_deref(), time),
+                }
             }
             if ui.input(|i| i.key_pressed(egui::Key::Space) && i.modifiers.is_none()) {
                 self.toggle_play(cx);
