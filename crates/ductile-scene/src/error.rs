@@ -79,6 +79,17 @@ pub enum SceneError {
         /// The missing area.
         area: String,
     },
+    /// A macro's own area (the area a new layer of it works in) is not an area of the mesh
+    /// that uses it (or of any mesh, when no macro tool uses it yet).
+    #[error("macro '{name}': its area '{area}' is not defined on {meshes}")]
+    UnknownMacroArea {
+        /// The macro.
+        name: String,
+        /// The missing area.
+        area: String,
+        /// Where it was looked for, as words ("mesh 'head'", "any mesh").
+        meshes: String,
+    },
     /// A macro node names a macro that is not in the document's library.
     #[error("macro node '{node}': there is no macro named '{name}'")]
     UnknownMacro {

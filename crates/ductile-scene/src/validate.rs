@@ -88,6 +88,15 @@ impl Document {
             }
         }
         for (name, m) in &self.macros {
+            if let Some(area) = &m.area
+                && let Some(meshes) = self.macro_area_missing(name, area)
+            {
+                out.push(SceneError::UnknownMacroArea {
+                    name: name.clone(),
+                    area: area.clone(),
+                    meshes,
+                });
+            }
             let tool = ductile_core::tool::Tool::Ffsd(m.tool(1.0));
             push_core(&mut out, tool.validate(&format!("macro '{name}'")));
             if !(m.range.0.is_finite() && m.range.1.is_finite() && m.range.0 < m.range.1) {
@@ -100,6 +109,41 @@ impl Document {
         self.animation_problems(&mut out);
         self.variant_problems(&mut out);
         out
+    }
+
+    /// Where macro `name`'s area `area` is missing, in words: the meshes whose stacks hold a
+    /// layer of one of its macro tools and lack the area, or "any mesh" when no macro tool
+    /// is on a stack and no mesh has the area; `None` when it is found.
+    fn macro_area_missing(&self, name: &str, area: &str) -> Option<String> {
+        let users: Vec<&str> = self
+            .nodes
+            .iter()
+            .filter(|n| matches!(&n.kind, NodeKind::Macro(m) if m.name == name))
+            .map(|n| n.name.as_str())
+            .collect();
+        let mut using = Vec::new();
+        let mut any = false;
+        for n in &self.nodes {
+            if let NodeKind::Mesh(mesh) = &n.kind {
+                any |= mesh.areas.contains_key(area);
+                if mesh.stack.iter().any(|l| users.contains(&l.tool.as_str()))
+                    && !mesh.areas.contains_key(area)
+                {
+                    using.push(format!("mesh '{}'", n.name));
+                }
+            }
+        }
+        let on_stacks = self.nodes.iter().any(|n| {
+            matches!(&n.kind, NodeKind::Mesh(mesh)
+                if mesh.stack.iter().any(|l| users.contains(&l.tool.as_str())))
+        });
+        if !using.is_empty() {
+            Some(using.join(", "))
+        } else if !on_stacks && !any {
+            Some("any mesh".to_owned())
+        } else {
+            None
+        }
     }
 
     fn mesh_problems(

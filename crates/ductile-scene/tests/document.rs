@@ -152,3 +152,44 @@ fn region_areas_select_vertices_inside_their_shapes() {
         .insert("x0".into(), region);
     assert_eq!(d.area_vertices("mesh", "x0", &quad()).unwrap(), vec![0, 2]);
 }
+
+#[test]
+fn a_macro_area_must_exist_on_the_mesh_that_uses_it() {
+    let macro_def = |area: &str| ductile_core::ffsd::FfsdMacro {
+        label: "Nose".into(),
+        group: String::new(),
+        area: Some(area.into()),
+        points: vec![ControlPoint::basic(Vec3::ZERO, 0.1, 2.0, 0.1)],
+        height: None,
+        range: (-1.0, 1.0),
+    };
+    // Not used by any macro tool yet: the area must exist on some mesh.
+    let mut d = doc();
+    d.macros.insert("nose".into(), macro_def("left"));
+    assert!(d.problems().is_empty(), "{:?}", d.problems());
+    d.macros.insert("nose".into(), macro_def("tip"));
+    let p: Vec<String> = d.problems().iter().map(ToString::to_string).collect();
+    assert_eq!(
+        p,
+        vec!["macro 'nose': its area 'tip' is not defined on any mesh".to_owned()]
+    );
+    // Used by a macro tool on the mesh's stack: the area must be that mesh's.
+    d.nodes.push(Node {
+        name: "nose-length".into(),
+        parent: Some("mesh".into()),
+        transform: Transform::default(),
+        kind: NodeKind::Macro(MacroUse {
+            name: "nose".into(),
+            value: 0.5,
+        }),
+    });
+    let NodeKind::Mesh(m) = &mut d.nodes[0].kind else {
+        panic!()
+    };
+    m.stack.push(LayerSpec::new("nose-length"));
+    let p: Vec<String> = d.problems().iter().map(ToString::to_string).collect();
+    assert_eq!(
+        p,
+        vec!["macro 'nose': its area 'tip' is not defined on mesh 'mesh'".to_owned()]
+    );
+}
