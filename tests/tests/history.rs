@@ -332,3 +332,27 @@ fn cli_lists_and_replays_histories() {
         "apply and replay write the same file"
     );
 }
+
+#[test]
+fn check_replays_every_step_of_a_history_file() {
+    let golden = data("golden-history.ron");
+    let (r, out) = cli(&["check", golden.to_str().unwrap()]);
+    assert_eq!(r, Ok(0), "{out}");
+    assert!(out.contains("ok"), "{out}");
+    // A step that does not replay is named, with its label; the check fails.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(data("golden-grid.obj"), dir.path().join("golden-grid.obj")).unwrap();
+    let path = dir.path().join("stale.history.ron");
+    let text = std::fs::read_to_string(&golden).unwrap();
+    std::fs::write(
+        &path,
+        text.replace("old: true, new: false", "old: false, new: true"),
+    )
+    .unwrap();
+    let (r, out) = cli(&["check", path.to_str().unwrap()]);
+    assert_eq!(r, Ok(1), "{out}");
+    assert!(
+        out.contains("step 3") && out.contains("disable the corner layer"),
+        "{out}"
+    );
+}

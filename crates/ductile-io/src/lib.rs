@@ -48,7 +48,8 @@ pub use project::{
     EmbeddedMesh, ImportedMesh, Project, ProjectWarning, history_path_for, scene_path_for,
 };
 pub use scene::{
-    LoadedMesh, LoadedScene, check_scene, load_scene, parse_scene, read_scene, save_scene,
+    LoadedMesh, LoadedScene, check_history, check_scene, load_scene, parse_scene, read_scene,
+    save_scene,
 };
 
 /// Writes `bytes` to `path` atomically: into a temporary file in the same directory, flushed

@@ -316,10 +316,32 @@ pub fn load_scene(path: impl AsRef<Path>) -> Result<LoadedScene> {
 #[must_use]
 pub fn check_scene(path: impl AsRef<Path>) -> Vec<IoError> {
     let path = path.as_ref();
-    let document = match read_scene(path) {
-        Ok(d) => d,
+    match read_scene(path) {
+        Ok(d) => check_document(path, path, &d),
+        Err(e) => vec![e],
+    }
+}
+
+/// Every problem of a history file: a read or parse error or a bad base (alone), the first
+/// step that does not replay (naming it), or else every problem of the document the whole
+/// history replays to, as [`check_scene`] finds them (meshes relative to the history's mesh
+/// root). Empty when the file is fine.
+#[must_use]
+pub fn check_history(path: impl AsRef<Path>) -> Vec<IoError> {
+    let path = path.as_ref();
+    let loaded = match crate::history_file::read_history(path) {
+        Ok(l) => l,
         Err(e) => return vec![e],
     };
+    match loaded.replay(loaded.history.len()) {
+        Ok(document) => check_document(path, &loaded.mesh_root, &document),
+        Err(e) => vec![e],
+    }
+}
+
+/// The problems of `document`, read from `path`, whose mesh sources are relative to
+/// `mesh_root` (see [`check_scene`]).
+fn check_document(path: &Path, mesh_root: &Path, document: &Document) -> Vec<IoError> {
     let mut out: Vec<IoError> = document
         .problems()
         .into_iter()
@@ -332,7 +354,7 @@ pub fn check_scene(path: impl AsRef<Path>) -> Vec<IoError> {
         let NodeKind::Mesh(m) = &node.kind else {
             continue;
         };
-        match load_node_mesh(path, &node.name, &m.source) {
+        match load_node_mesh(mesh_root, &node.name, &m.source) {
             Err(e) => out.push(e),
             Ok(loaded) => {
                 let mut report = |source: ductile_scene::error::SceneError| {

@@ -1,4 +1,5 @@
-//! `ductile check FILE`: print every problem of a scene file.
+//! `ductile check FILE`: print every problem of a scene file, or of a history file (its base,
+//! every step replayed, and the document it ends at).
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -6,7 +7,8 @@ use std::path::PathBuf;
 /// Arguments of `ductile check`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The scene file (RON) to validate.
+    /// The scene file (RON) to validate, or a history file (`.history.ron`: every step is
+    /// replayed and the final document checked).
     pub file: PathBuf,
 }
 
@@ -14,8 +16,20 @@ pub struct Args {
 /// prints `ok` and returns 0 otherwise. Warnings (animation tracks that step where their keys
 /// cannot be interpolated) are printed first and do not fail the check.
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<u8> {
-    let problems = ductile_io::check_scene(&args.file);
-    if let Ok(doc) = ductile_io::read_scene(&args.file) {
+    let history = ductile_io::is_history_file(&args.file);
+    let problems = if history {
+        ductile_io::check_history(&args.file)
+    } else {
+        ductile_io::check_scene(&args.file)
+    };
+    let document = if history {
+        ductile_io::read_history(&args.file)
+            .ok()
+            .and_then(|h| h.replay(h.history.len()).ok())
+    } else {
+        ductile_io::read_scene(&args.file).ok()
+    };
+    if let Some(doc) = document {
         for w in doc.warnings() {
             writeln!(out, "warning: {}: {w}", args.file.display())?;
         }
