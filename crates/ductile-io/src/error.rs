@@ -103,7 +103,19 @@ pub enum IoError {
         /// What is wrong.
         problem: String,
     },
-    /// The OBJ file could not be decoded.
+    /// A line of an OBJ file that cannot be decoded: its number (from 1), its text and why.
+    #[error("{}:{line}: invalid OBJ line `{text}`: {problem}", path.display())]
+    ObjLine {
+        /// The file.
+        path: PathBuf,
+        /// Line number, from 1.
+        line: usize,
+        /// The line (cut to 80 characters).
+        text: String,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// The OBJ file could not be decoded (and no single line could be blamed).
     #[error("{}: invalid OBJ: {source}", path.display())]
     Obj {
         /// The file.

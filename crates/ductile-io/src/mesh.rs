@@ -223,6 +223,84 @@ impl Merger {
     }
 }
 
+/// The first line of an OBJ file that the decoder would refuse, for an error that names it:
+/// its number (from 1), its text and the problem — a vertex, texture or normal coordinate
+/// that is not a number (or missing), a face with fewer than three vertices, or a face index
+/// that is zero, not a number or beyond the elements defined so far (negative indices count
+/// back from the last one, as the format says).
+fn obj_bad_line(bytes: &[u8]) -> Option<(usize, String, String)> {
+    let text = String::from_utf8_lossy(bytes);
+    let mut counts = [0_i64; 3]; // v, vt, vn
+    for (k, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        let mut words = line.split_whitespace();
+        let Some(kind) = words.next() else {
+            continue;
+        };
+        let rest: Vec<&str> = words.collect();
+        let bad = |problem: String| {
+            let shown: String = raw.trim().chars().take(80).collect();
+            Some((k + 1, shown, problem))
+        };
+        let numbers = |need: usize, what: &str| -> Option<String> {
+            if rest.len() < need {
+                return Some(format!("{what} needs {need} numbers, found {}", rest.len()));
+            }
+            rest.iter()
+                .find(|w| w.parse::<f64>().is_err())
+                .map(|w| format!("'{w}' is not a number"))
+        };
+        match kind {
+            "v" => {
+                if let Some(p) = numbers(3, "a vertex") {
+                    return bad(p);
+                }
+                counts[0] += 1;
+            }
+            "vt" => {
+                if let Some(p) = numbers(1, "a texture coordinate") {
+                    return bad(p);
+                }
+                counts[1] += 1;
+            }
+            "vn" => {
+                if let Some(p) = numbers(3, "a normal") {
+                    return bad(p);
+                }
+                counts[2] += 1;
+            }
+            "f" => {
+                if rest.len() < 3 {
+                    return bad(format!(
+                        "a face needs at least 3 vertices, found {}",
+                        rest.len()
+                    ));
+                }
+                for corner in &rest {
+                    for (slot, index) in corner.split('/').enumerate().take(3) {
+                        if index.is_empty() && slot > 0 {
+                            continue; // `1//3`: no texture coordinate
+                        }
+                        let names = ["vertex", "texture coordinate", "normal"];
+                        let Ok(i) = index.parse::<i64>() else {
+                            return bad(format!("'{corner}': '{index}' is not an index"));
+                        };
+                        let n = counts[slot];
+                        if i == 0 || i > n || i < -n {
+                            return bad(format!(
+                                "'{corner}': {} index {i} is out of range ({n} defined so far)",
+                                names[slot]
+                            ));
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
 fn load_obj(bytes: &[u8], path: &Path, select: Option<&str>) -> Result<Mesh> {
     let mut reader = bytes;
     let options = tobj::LoadOptions {
@@ -235,9 +313,17 @@ fn load_obj(bytes: &[u8], path: &Path, select: Option<&str>) -> Result<Mesh> {
     let (models, _) = tobj::load_obj_buf(&mut reader, &options, |_| {
         Err(tobj::LoadError::OpenFileFailed)
     })
-    .map_err(|source| IoError::Obj {
-        path: path.to_owned(),
-        source,
+    .map_err(|source| match obj_bad_line(bytes) {
+        Some((line, text, problem)) => IoError::ObjLine {
+            path: path.to_owned(),
+            line,
+            text,
+            problem,
+        },
+        None => IoError::Obj {
+            path: path.to_owned(),
+            source,
+        },
     })?;
     if let Some(name) = select
         && !models.iter().any(|m| m.name == name)

@@ -222,3 +222,26 @@ fn non_finite_texture_coordinates_are_refused() {
         "{err}"
     );
 }
+
+#[test]
+fn obj_errors_name_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    for (text, expected) in [
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 x\nf 1 2 3\n",
+            "bad.obj:3: invalid OBJ line `v 0 1 x`: 'x' is not a number",
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\n# a comment\nf 1 2 9\n",
+            "bad.obj:5: invalid OBJ line `f 1 2 9`: '9': vertex index 9 is out of range (3 defined so far)",
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n",
+            "bad.obj:5: invalid OBJ line `f 1/1 2/2 3/1`: '2/2': texture coordinate index 2 is out of range (1 defined so far)",
+        ),
+    ] {
+        let path = write(dir.path(), "bad.obj", text);
+        let e = load(&path).unwrap_err();
+        assert!(e.ends_with(expected), "{e}");
+    }
+}
