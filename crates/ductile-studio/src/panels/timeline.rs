@@ -334,6 +334,13 @@ impl TimelinePanel {
                 }
             }
             if ui.input(|i| i.key_pressed(egui::Key::Space) && i.modifiers.is_none()) {
+                // Space plays everywhere (as in Blender): a button focused with Tab (drawn
+                // after the timeline) must not also take it as a click.
+                ui.memory_mut(|m| {
+                    if let Some(id) = m.focused() {
+                        m.surrender_focus(id);
+                    }
+                });
                 self.toggle_play(cx);
             }
         }
