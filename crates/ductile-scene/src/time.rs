@@ -215,12 +215,17 @@ impl Document {
         }
     }
 
-    /// Warnings that do not stop evaluation: intervals of a track that should interpolate
-    /// but step because their two keys' values cannot be interpolated (another number of
-    /// points or spline values, another kind).
+    /// Warnings that do not stop evaluation: macros whose own area is missing where they are
+    /// used ([`Document::macro_area_warnings`]), and intervals of a track that should
+    /// interpolate but step because their two keys' values cannot be interpolated (another
+    /// number of points or spline values, another kind).
     #[must_use]
     pub fn warnings(&self) -> Vec<String> {
-        let mut out = Vec::new();
+        let mut out: Vec<String> = self
+            .macro_area_warnings()
+            .iter()
+            .map(ToString::to_string)
+            .collect();
         for (node, path, keys) in self.animation.iter() {
             for k in structure_breaks(keys) {
                 out.push(format!(

@@ -88,15 +88,6 @@ impl Document {
             }
         }
         for (name, m) in &self.macros {
-            if let Some(area) = &m.area
-                && let Some(meshes) = self.macro_area_missing(name, area)
-            {
-                out.push(SceneError::UnknownMacroArea {
-                    name: name.clone(),
-                    area: area.clone(),
-                    meshes,
-                });
-            }
             let tool = ductile_core::tool::Tool::Ffsd(m.tool(1.0));
             push_core(&mut out, tool.validate(&format!("macro '{name}'")));
             if !(m.range.0.is_finite() && m.range.1.is_finite() && m.range.0 < m.range.1) {
@@ -109,6 +100,26 @@ impl Document {
         self.animation_problems(&mut out);
         self.variant_problems(&mut out);
         out
+    }
+
+    /// Macros whose own area is missing where they are used (see
+    /// [`SceneError::UnknownMacroArea`]): a warning, not a problem — the scene evaluates as
+    /// it is (layers name their areas themselves), but a new layer of such a macro (the
+    /// Studio's "Add layer") would be refused.
+    #[must_use]
+    pub fn macro_area_warnings(&self) -> Vec<SceneError> {
+        self.macros
+            .iter()
+            .filter_map(|(name, m)| {
+                let area = m.area.as_ref()?;
+                let meshes = self.macro_area_missing(name, area)?;
+                Some(SceneError::UnknownMacroArea {
+                    name: name.clone(),
+                    area: area.clone(),
+                    meshes,
+                })
+            })
+            .collect()
     }
 
     /// Where macro `name`'s area `area` is missing, in words: the meshes whose stacks hold a
