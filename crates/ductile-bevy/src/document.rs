@@ -208,7 +208,12 @@ impl SceneDocument {
         if label.is_empty() {
             label = op.describe();
         }
+        let keys_before = key_count(&op);
         let op = op.onto_base(&self.document, self.shown(), self.time)?;
+        if key_count(&op) > keys_before {
+            // The edit changed animated channels: say so in the history (auto-key).
+            label = format!("{label} (keyed at frame {})", self.frame());
+        }
         self.history
             .push(&mut self.document, op, label, now_ms(), gesture)?;
         self.changed();
@@ -244,6 +249,15 @@ impl SceneDocument {
         self.history.jump(&mut self.document, n)?;
         self.changed();
         Ok(())
+    }
+}
+
+/// How many key edits `op` holds (groups counted through).
+fn key_count(op: &Operation) -> usize {
+    match op {
+        Operation::SetKey { .. } => 1,
+        Operation::Group { ops, .. } => ops.iter().map(key_count).sum(),
+        _ => 0,
     }
 }
 
@@ -410,6 +424,11 @@ mod tests {
         t.translation = Vec3::Y;
         doc.apply(Operation::set_transform(doc.shown(), "g", t)?, "", None)?;
         assert_eq!(at(&doc), Vec3::Y);
+        assert_eq!(
+            doc.history().entries()[0].label,
+            "set transform of 'g' (keyed at frame 12)",
+            "the history says the edit keyed"
+        );
         doc.set_time(1.0);
         assert_eq!(at(&doc), Vec3::X, "the key at 1 s is untouched");
         assert!(doc.undo()?);
