@@ -555,22 +555,22 @@ def story_technical(studio):
     axial = studio.shot("7-axial-dragged")
     expect(mesh_outline_change(added, axial) > 100, "the axial drag did not deform Spot")
     # Reorder: the axial row (third) dragged by its grip onto the first row.
-    studio.drag([STACK_GRIP[2], STACK_GRIP[0]], steps=6)
+    studio.drag([stack_row(2, "grip"), stack_row(0, "grip")], steps=6)
     reordered = studio.shot("8-reordered")
     expect(differing(axial, reordered) > 100, "moving the axial layer to the bottom of the "
                                               "stack changed nothing")
     undo_check(studio, axial, "8-reordered", "of the reorder")
     # Toggle the (now second) lattice layer off, then on again.
-    studio.click(*STACK_ENABLE[1])
+    studio.click(*stack_row(1, "enable"))
     off = studio.shot("9-lattice-off")
     expect(mesh_outline_change(reordered, off) > 300, "turning the lattice layer off changed "
                                                       "nothing")
-    studio.click(*STACK_ENABLE[1])
+    studio.click(*stack_row(1, "enable"))
     on = studio.shot("10-lattice-on")
     expect(differing(reordered, on) == 0, "turning the lattice layer on again does not "
                                           "restore Spot")
     # Mask: select the lattice's layer (its name in the stack), then Add > Sphere volume.
-    studio.click(*STACK_NAME[1])
+    studio.click(*stack_row(1, "name"))
     studio.click(*ADD_MENU)
     studio.click(*MENU["Sphere volume"])
     masked = studio.shot("11-lattice-masked")
@@ -586,10 +586,10 @@ def story_technical(studio):
            f"ductile apply of the saved scene failed: {run.stderr.strip()}")
 
 
-# The stack panel's rows (three layers): the drag grip, the enable tick and the name.
-STACK_GRIP = [(14, 234), (14, 257), (14, 280)]
-STACK_ENABLE = [(35, 234), (35, 257), (35, 280)]
-STACK_NAME = [(98, 234), (98, 257), (98, 280)]
+def stack_row(row, part):
+    """Where `part` ("grip", "enable" or "name") of the stack panel's row `row` is, with
+    three nodes in the outliner (rows from y = 234, 23 px apart)."""
+    return ({"grip": 14, "enable": 35, "name": 98}[part], 234 + 23 * row)
 
 
 def history_path(scene):

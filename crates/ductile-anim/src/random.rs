@@ -13,6 +13,18 @@ use chacha20::rand_core::{Rng, SeedableRng};
 
 use crate::error::{AnimError, Result};
 
+/// The generator of `seed`: ChaCha8 keyed with the seed's little-endian bytes, then zeros.
+fn seeded(seed: u64) -> ChaCha8Rng {
+    let mut bytes = [0_u8; 32];
+    bytes[..8].copy_from_slice(&seed.to_le_bytes());
+    ChaCha8Rng::from_seed(bytes)
+}
+
+/// The next uniform number in `[0, 1)`, from the top 53 bits of a `u64`.
+fn unit(rng: &mut ChaCha8Rng) -> f64 {
+    (rng.next_u64() >> 11) as f64 * (1.0 / (1_u64 << 53) as f64)
+}
+
 /// Uniform random weights for `n` sources (non-negative, summing to 1), drawn from `seed`,
 /// then pulled towards the mean `1/n` by `spread ∈ [0, 1]`: `wᵢ = (1 − spread)/n + spread·uᵢ`.
 /// `spread = 0` gives the mean of the sources, `1` the full simplex (FaceGen's advice: limit
@@ -28,12 +40,8 @@ pub fn random_weights(n: usize, seed: u64, spread: f32) -> Result<Vec<f32>> {
             expected: "in [0, 1]",
         });
     }
-    let mut bytes = [0_u8; 32];
-    bytes[..8].copy_from_slice(&seed.to_le_bytes());
-    let mut rng = ChaCha8Rng::from_seed(bytes);
-    let mut cuts: Vec<f64> = (1..n)
-        .map(|_| (rng.next_u64() >> 11) as f64 * (1.0 / (1_u64 << 53) as f64))
-        .collect();
+    let mut rng = seeded(seed);
+    let mut cuts: Vec<f64> = (1..n).map(|_| unit(&mut rng)).collect();
     cuts.sort_by(f64::total_cmp);
     let mut prev = 0.0;
     let spread = f64::from(spread);
@@ -58,14 +66,9 @@ pub fn random_weights(n: usize, seed: u64, spread: f32) -> Result<Vec<f32>> {
 /// the caller scales into each slider's range.
 #[must_use]
 pub fn random_unit_values(n: usize, seed: u64) -> Vec<f32> {
-    let mut bytes = [0_u8; 32];
-    bytes[..8].copy_from_slice(&seed.to_le_bytes());
-    let mut rng = ChaCha8Rng::from_seed(bytes);
+    let mut rng = seeded(seed);
     (0..n)
-        .map(|_| {
-            let u = (rng.next_u64() >> 11) as f64 * (1.0 / (1_u64 << 53) as f64);
-            (2.0 * u - 1.0) as f32
-        })
+        .map(|_| (2.0 * unit(&mut rng) - 1.0) as f32)
         .collect()
 }
 

@@ -151,9 +151,20 @@ impl SceneDocument {
             return;
         }
         self.time = t;
-        if !self.document.animation.is_static() {
-            self.revision += 1;
-            self.pose();
+        if self.document.animation.is_static() {
+            return;
+        }
+        self.revision += 1;
+        // Playback moves the time every frame: pose the copy in place (every animated
+        // channel is written again) instead of cloning the document.
+        match &mut self.posed {
+            Some(posed) => {
+                if let Err(e) = posed.pose_at(&self.document, t) {
+                    self.pose_error = Some(e.to_string());
+                    self.posed = None;
+                }
+            }
+            None => self.pose(),
         }
     }
 

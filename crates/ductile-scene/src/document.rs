@@ -212,6 +212,19 @@ pub struct VolumeNode {
     pub shape: Shape,
 }
 
+/// `stem`, or `stem-2`, `stem-3`, …: the first name `taken` says is free (node names,
+/// variant names).
+#[must_use]
+pub fn unique_among(stem: &str, taken: impl Fn(&str) -> bool) -> String {
+    if !taken(stem) {
+        return stem.to_owned();
+    }
+    (2..)
+        .map(|k| format!("{stem}-{k}"))
+        .find(|n| !taken(n))
+        .unwrap_or_else(|| stem.to_owned())
+}
+
 impl Document {
     /// Position of the node called `name`.
     #[must_use]
@@ -222,13 +235,7 @@ impl Document {
     /// `stem`, or `stem-2`, `stem-3`, …: the first name no node has.
     #[must_use]
     pub fn unique_name(&self, stem: &str) -> String {
-        if self.index_of(stem).is_none() {
-            return stem.to_owned();
-        }
-        (2..)
-            .map(|k| format!("{stem}-{k}"))
-            .find(|n| self.index_of(n).is_none())
-            .unwrap_or_else(|| stem.to_owned())
+        unique_among(stem, |n| self.index_of(n).is_some())
     }
 
     /// Every node's index by name (the first, should a name repeat): for walks over many

@@ -133,21 +133,18 @@ impl Document {
             .map(|n| n.name.as_str())
             .collect();
         let mut using = Vec::new();
-        let mut any = false;
+        let (mut any, mut on_stacks) = (false, false);
         for n in &self.nodes {
             if let NodeKind::Mesh(mesh) = &n.kind {
-                any |= mesh.areas.contains_key(area);
-                if mesh.stack.iter().any(|l| users.contains(&l.tool.as_str()))
-                    && !mesh.areas.contains_key(area)
-                {
+                let has = mesh.areas.contains_key(area);
+                let uses = mesh.stack.iter().any(|l| users.contains(&l.tool.as_str()));
+                any |= has;
+                on_stacks |= uses;
+                if uses && !has {
                     using.push(format!("mesh '{}'", n.name));
                 }
             }
         }
-        let on_stacks = self.nodes.iter().any(|n| {
-            matches!(&n.kind, NodeKind::Mesh(mesh)
-                if mesh.stack.iter().any(|l| users.contains(&l.tool.as_str())))
-        });
         if !using.is_empty() {
             Some(using.join(", "))
         } else if !on_stacks && !any {

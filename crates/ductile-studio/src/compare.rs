@@ -70,6 +70,13 @@ pub fn update_compare(
     mut copies: Query<(Entity, &mut CompareCopy, &mut Transform)>,
     mut cameras: Query<(&mut OrbitCamera, &Projection, &Camera, &GlobalTransform)>,
 ) {
+    // Idle (the common case): no copy wanted and none left to remove.
+    if compare.entries.is_empty() && copies.is_empty() {
+        if !compare.labels.is_empty() {
+            compare.labels.clear();
+        }
+        return;
+    }
     let Some((node, source, at)) = sources.iter().next() else {
         return;
     };

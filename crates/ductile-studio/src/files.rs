@@ -50,16 +50,7 @@ pub fn poll_export(mut job: ResMut<ExportJob>, mut notices: ResMut<Notices>) {
         return;
     };
     if let Some(result) = bevy::tasks::futures::check_ready(&mut running.task) {
-        match result {
-            Ok(text) => {
-                info!("{text}");
-                notices.0.push(text);
-            }
-            Err(text) => {
-                error!("{text}");
-                notices.0.push(text);
-            }
-        }
+        notices.push_result(result);
         job.0 = None;
     }
 }
@@ -259,16 +250,7 @@ pub fn run_actions(
             dialogs.confirm = Some(action);
             continue;
         }
-        let mut notice = |r: Result<String, String>| match r {
-            Ok(text) => {
-                info!("{text}");
-                notices.0.push(text);
-            }
-            Err(text) => {
-                error!("{text}");
-                notices.0.push(text);
-            }
-        };
+        let mut notice = |r: Result<String, String>| notices.push_result(r);
         match action {
             StudioAction::New => {
                 replace_project(

@@ -38,6 +38,17 @@ pub struct OpenProject(pub Project);
 #[derive(Resource, Debug, Default, Clone)]
 pub struct Notices(pub Vec<String>);
 
+impl Notices {
+    /// Logs `result` (info or error) and shows its text in the status bar.
+    pub fn push_result(&mut self, result: Result<String, String>) {
+        match &result {
+            Ok(text) => info!("{text}"),
+            Err(text) => error!("{text}"),
+        }
+        self.0.push(result.unwrap_or_else(|e| e));
+    }
+}
+
 /// Frame every mesh once its evaluation exists (after opening a project).
 #[derive(Resource, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FramePending(pub bool);

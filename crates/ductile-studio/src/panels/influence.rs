@@ -9,9 +9,9 @@ use ductile_core::spline::SplineControl;
 use ductile_history::operation::Operation;
 use ductile_scene::document::{InfluenceSpec, NodeKind};
 
+use super::PanelContext;
 use super::curve_editor::curve_editor;
 use super::params::{REFUSED, Refusals, parameter_list};
-use super::{KeyState, PanelContext, hover_channel};
 
 /// The influence and volume sections' state.
 #[derive(Debug, Default)]
@@ -220,18 +220,7 @@ impl InfluenceEditor {
             return;
         }
         let channels = shape_channels(shape);
-        let scene = cx.doc;
-        let keyed = |path: &str| KeyState::of(scene, name, path);
-        let ctx = ui.ctx().clone();
-        let mut hovered = |path: &str| hover_channel(&ctx, name, path);
-        if let Some(edit) = parameter_list(
-            ui,
-            &format!("volume-{name}"),
-            &channels,
-            &self.refusals,
-            &keyed,
-            &mut hovered,
-        ) {
+        if let Some(edit) = parameter_list(ui, cx.doc, name, &channels, &self.refusals) {
             let mut new = shape.clone();
             let result = set_shape_channel(&mut new, &edit.path, &edit.value)
                 .map_err(|e| e.to_string())

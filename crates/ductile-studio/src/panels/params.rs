@@ -317,16 +317,19 @@ pub fn grouped(channels: &[(String, Value)]) -> Vec<(&str, Vec<&(String, Value)>
     groups
 }
 
-/// Lists `channels` (path, value) grouped by their path's prefix, one row each; returns the
-/// edit made this frame, if any.
+/// Lists `channels` (path, value) of node `node` grouped by their path's prefix, one row
+/// each, animated ones coloured by their [`super::KeyState`] in `doc`; the row under the
+/// pointer is remembered for K ([`super::hover_channel`]). Returns the edit made this frame,
+/// if any.
 pub fn parameter_list(
     ui: &mut egui::Ui,
-    id: &str,
+    doc: &ductile_bevy::prelude::SceneDocument,
+    node: &str,
     channels: &[(String, Value)],
     refusals: &Refusals,
-    keyed: &dyn Fn(&str) -> super::KeyState,
-    hovered: &mut dyn FnMut(&str),
 ) -> Option<ParamEdit> {
+    let id = format!("params-{node}");
+    let id = id.as_str();
     let mut edit = None;
     let groups = grouped(channels);
     let many = groups.len() > 6;
@@ -340,7 +343,7 @@ pub fn parameter_list(
                         let m = meta(path);
                         // Animated fields are coloured as in Blender (yellow on a key,
                         // green between keys); editing one keys it at the current frame.
-                        let state = keyed(path);
+                        let state = super::KeyState::of(doc, node, path);
                         let mut label = egui::RichText::new(leaf(path));
                         if let Some(c) = state.color() {
                             label = label.color(c);
@@ -365,7 +368,7 @@ pub fn parameter_list(
                         });
                         over |= inner.response.contains_pointer();
                         if over {
-                            hovered(path);
+                            super::hover_channel(ui.ctx(), node, path);
                         }
                         ui.end_row();
                     }

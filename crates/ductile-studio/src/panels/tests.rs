@@ -123,6 +123,33 @@ impl<P> State<P> {
     }
 }
 
+/// Presses at `from`, moves to `to` over `steps` frames and releases there; with `apply`, the
+/// emitted commands are applied after every frame, as the Studio does after its UI pass.
+fn slow_drag<P>(
+    h: &mut Harness<'_, State<P>>,
+    from: egui::Pos2,
+    to: egui::Pos2,
+    steps: usize,
+    apply: bool,
+) {
+    h.hover_at(from);
+    h.run();
+    h.drag_at(from);
+    h.run();
+    for k in 1..=steps {
+        h.hover_at(from + (to - from) * (k as f32 / steps as f32));
+        h.run();
+        if apply {
+            h.state_mut().apply_commands();
+        }
+    }
+    h.drop_at(to);
+    h.run();
+    if apply {
+        h.state_mut().apply_commands();
+    }
+}
+
 /// A harness drawing `show` with a panel context built from the state each frame.
 fn harness<'a, P: 'a>(
     state: State<P>,
@@ -315,16 +342,7 @@ fn the_inspector_edits_a_tool_and_refuses_an_out_of_range_value() {
         .get(egui_kittest::kittest::By::new().predicate(is_epsilon))
         .rect()
         .center();
-    h.hover_at(at);
-    h.run();
-    h.drag_at(at);
-    h.run();
-    for k in 1..=30 {
-        h.hover_at(at - egui::vec2(10.0 * k as f32, 0.0));
-        h.run();
-    }
-    h.drop_at(at - egui::vec2(300.0, 0.0));
-    h.run();
+    slow_drag(&mut h, at, at - egui::vec2(300.0, 0.0), 30, false);
     // Only the edits that kept ε > 0 were applied; the rest was refused with the reason.
     let last_epsilon = h.state().ops().iter().rev().find_map(|o| match o {
         Operation::SetTool {
@@ -448,18 +466,7 @@ fn the_timeline_keys_the_selection_and_a_drag_moves_keys_in_one_step() {
     h.run();
     let from = h.state().panel.key_position(12.0, 0).unwrap();
     let to = h.state().panel.key_position(20.0, 0).unwrap();
-    h.hover_at(from);
-    h.run();
-    h.drag_at(from);
-    h.run();
-    for k in 1..=8 {
-        h.hover_at(from + (to - from) * (k as f32 / 8.0));
-        h.run();
-        h.state_mut().apply_commands();
-    }
-    h.drop_at(to);
-    h.run();
-    h.state_mut().apply_commands();
+    slow_drag(&mut h, from, to, 8, true);
     assert_eq!(
         h.state().doc.history().len(),
         3,
@@ -608,18 +615,7 @@ fn the_identikit_moves_both_sides_when_symmetric_and_draws_seeded_faces() {
         .unwrap()
         .rect()
         .center();
-    h.hover_at(at);
-    h.run();
-    h.drag_at(at);
-    h.run();
-    for k in 1..=10 {
-        h.hover_at(at + egui::vec2(4.0 * k as f32, 0.0));
-        h.run();
-        h.state_mut().apply_commands();
-    }
-    h.drop_at(at + egui::vec2(40.0, 0.0));
-    h.run();
-    h.state_mut().apply_commands();
+    slow_drag(&mut h, at, at + egui::vec2(40.0, 0.0), 10, true);
     assert_eq!(h.state().doc.history().len(), 1, "one step");
     let Some(Operation::Group { ops: pair, .. }) = h
         .state()

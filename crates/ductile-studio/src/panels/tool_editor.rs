@@ -24,7 +24,7 @@ use ductile_scene::create::resized_lattice;
 use ductile_scene::handles::HandleId;
 
 use super::params::{REFUSED, Refusals, meta, parameter_list, value_widget};
-use super::{KeyState, PanelContext, PanelRequest, hover_channel};
+use super::{PanelContext, PanelRequest};
 
 /// The tool section's state: refused edits and their reasons.
 #[derive(Debug, Default)]
@@ -92,18 +92,7 @@ impl ToolEditor {
         if channels.is_empty() {
             ui.weak("No numeric parameter.");
         }
-        let doc = cx.doc;
-        let keyed = |path: &str| KeyState::of(doc, name, path);
-        let ctx = ui.ctx().clone();
-        let mut hovered = |path: &str| hover_channel(&ctx, name, path);
-        if let Some(edit) = parameter_list(
-            ui,
-            &format!("tool-{name}"),
-            &channels,
-            &self.refusals,
-            &keyed,
-            &mut hovered,
-        ) {
+        if let Some(edit) = parameter_list(ui, cx.doc, name, &channels, &self.refusals) {
             let mut new = tool.clone();
             match set_tool_channel(&mut new, &edit.path, &edit.value) {
                 Ok(()) => self.apply(cx, name, tool, new, &edit.path, Some(edit.response)),

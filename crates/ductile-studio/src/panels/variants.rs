@@ -8,7 +8,7 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use bevy_egui::egui;
 use ductile_history::operation::Operation;
-use ductile_scene::document::Document;
+use ductile_scene::document::{Document, unique_among};
 use ductile_scene::variant::{RandomOptions, Variant};
 
 use super::{PanelContext, PanelRequest};
@@ -62,18 +62,9 @@ impl Default for VariantsPanel {
     }
 }
 
-/// `stem`, or `stem-2`, `stem-3`, … : a name no variant of `doc` has.
+/// `stem`, or `stem-2`, `stem-3`, …: a name no variant of `doc` has.
 fn unique_variant_name(doc: &Document, stem: &str) -> String {
-    (1..)
-        .map(|i| {
-            if i == 1 {
-                stem.to_owned()
-            } else {
-                format!("{stem}-{i}")
-            }
-        })
-        .find(|n| !doc.variants.contains_key(n))
-        .unwrap_or_default()
+    unique_among(stem, |n| doc.variants.contains_key(n))
 }
 
 /// The operation that writes `variant`'s states into the scene, labelled `label`.
