@@ -18,7 +18,8 @@ mod common;
 
 /// Normal dependencies `ductile-core` may have: math, serialisation, errors, parallelism, and
 /// the numeric/graph crates its solvers use (faer for linear algebra, petgraph for the
-/// sketch tool's minimum cut, wide for the FFSD kernel's SIMD lanes).
+/// sketch tool's minimum cut, wide for the FFSD kernel's SIMD lanes, pulp to pick the SIMD
+/// width of the Bernstein lattice kernel when the program runs).
 const CORE_ALLOWED: &[&str] = &[
     "glam",
     "serde",
@@ -27,6 +28,7 @@ const CORE_ALLOWED: &[&str] = &[
     "faer",
     "petgraph",
     "wide",
+    "pulp",
 ];
 /// Normal dependencies `ductile-anim` may have: core, math, serialisation, errors, and a
 /// portable seeded generator for random variants.

@@ -3,7 +3,9 @@
 //! Subcommands live one per file in [`commands`]; adding one means a variant of
 //! [`Command`], a match arm in [`run`] and a file.
 
+pub mod batch;
 pub mod commands;
+pub mod suite;
 
 use std::ffi::OsString;
 use std::io::Write;
@@ -23,7 +25,7 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Evaluate every mesh's deformation stack (at a frame of the animation) and export the
-    /// result as glTF.
+    /// result as glTF; or, with --input and --out-dir, apply one mesh's stack to many meshes.
     Apply(commands::apply::Args),
     /// Validate a scene file and print every problem found.
     Check(commands::check::Args),

@@ -81,14 +81,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         _ => Path::new("."),
     };
     let existing = std::fs::metadata(&target).ok().map(|m| m.permissions());
-    let mut builder = tempfile::Builder::new();
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt as _;
-        // Created with 0666: the umask applies, as for any new file.
-        builder.permissions(std::fs::Permissions::from_mode(0o666));
-    }
-    let mut tmp = builder.tempfile_in(dir).map_err(err)?;
+    let file_name = target
+        .file_name()
+        .map_or_else(|| "file".into(), |n| n.to_string_lossy());
+    let mut tmp = temporary_in(dir, &file_name).map_err(err)?;
     if let Some(permissions) = existing {
         tmp.as_file().set_permissions(permissions).map_err(err)?;
     }
@@ -104,11 +100,69 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// The number of random characters in the name of [`write_atomic`]'s temporary file.
+const TEMPORARY_RANDOM_CHARS: usize = 6;
+
+/// A new temporary file in `dir` for the file called `file_name` there: `.NAME.XXXXXX.tmp`,
+/// hidden and recognisable after a crash ([`atomic_temporary_target`]), created with the
+/// permissions any new file gets (0666 less the umask) rather than 0600.
+fn temporary_in(dir: &Path, file_name: &str) -> std::io::Result<tempfile::NamedTempFile> {
+    let prefix = format!(".{file_name}.");
+    let mut builder = tempfile::Builder::new();
+    builder
+        .prefix(&prefix)
+        .suffix(".tmp")
+        .rand_bytes(TEMPORARY_RANDOM_CHARS);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt as _;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    builder.tempfile_in(dir)
+}
+
+/// The name of the file that a temporary file of [`write_atomic`] was to become, from the
+/// temporary file's name (`.NAME.XXXXXX.tmp` → `NAME`), or `None` for any other name. A
+/// process killed while writing leaves such a file beside the output; a later run may remove
+/// it.
+#[must_use]
+pub fn atomic_temporary_target(name: &str) -> Option<&str> {
+    let inner = name.strip_prefix('.')?.strip_suffix(".tmp")?;
+    let (target, random) = inner.rsplit_once('.')?;
+    (!target.is_empty()
+        && random.len() == TEMPORARY_RANDOM_CHARS
+        && random.chars().all(|c| c.is_ascii_alphanumeric()))
+    .then_some(target)
+}
+
 #[cfg(all(test, unix))]
 mod tests {
     use std::os::unix::fs::PermissionsExt as _;
 
-    use super::write_atomic;
+    use super::{atomic_temporary_target, write_atomic};
+
+    #[test]
+    fn temporary_files_name_their_target() {
+        assert_eq!(
+            atomic_temporary_target(".head.glb.a1B2c3.tmp"),
+            Some("head.glb")
+        );
+        assert_eq!(atomic_temporary_target(".a.b.c.x1y2z3.tmp"), Some("a.b.c"));
+        for other in [
+            "head.glb",
+            ".head.glb.tmp",
+            ".head.glb.abc.tmp",
+            "..x1y2z3.tmp",
+            ".h.x1y2z!.tmp",
+        ] {
+            assert_eq!(atomic_temporary_target(other), None, "{other}");
+        }
+        // What write_atomic leaves while it writes is recognised.
+        let dir = tempfile::tempdir().unwrap();
+        let tmp = super::temporary_in(dir.path(), "scene.ron").unwrap();
+        let name = tmp.path().file_name().unwrap().to_str().unwrap().to_owned();
+        assert_eq!(atomic_temporary_target(&name), Some("scene.ron"), "{name}");
+    }
 
     fn mode(p: &std::path::Path) -> u32 {
         std::fs::metadata(p).unwrap().permissions().mode() & 0o7777

@@ -80,6 +80,26 @@ impl Document {
         resolve_area(def, rest, &format!("mesh '{mesh}', area '{area}'"))
     }
 
+    /// The areas of mesh `mesh` given by stored vertex indices ([`Area::Vertices`]) that its
+    /// stack reads through its layers' influences, each once, in stack order.
+    ///
+    /// Such an area numbers the vertices of the mesh's own file, so it carries over only to
+    /// a mesh with the same stored vertex count; a [`Area::Region`] carries over to any mesh
+    /// (what `ductile apply --input` checks before applying a stack to other meshes).
+    pub fn vertex_index_areas_in_stack(&self, mesh: &str) -> Result<Vec<&str>> {
+        let node = self.mesh(mesh)?;
+        let mut out: Vec<&str> = Vec::new();
+        for spec in &node.stack {
+            let Some(area) = spec.influence.as_ref().and_then(|i| i.area.as_deref()) else {
+                continue;
+            };
+            if matches!(node.areas.get(area), Some(Area::Vertices(_))) && !out.contains(&area) {
+                out.push(area);
+            }
+        }
+        Ok(out)
+    }
+
     /// Resolves the stack of mesh `mesh` against its rest mesh. Each area is resolved once,
     /// however many layers use it.
     pub fn resolve_stack(&self, mesh: &str, rest: &RestMesh) -> Result<Stack> {

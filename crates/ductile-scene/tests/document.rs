@@ -194,3 +194,23 @@ fn a_macro_area_missing_on_the_mesh_that_uses_it_is_a_warning() {
         vec!["macro 'nose': its area 'tip' is not defined on mesh 'mesh'".to_owned()]
     );
 }
+
+#[test]
+fn vertex_index_areas_in_stack_names_what_only_the_same_mesh_can_use() {
+    let mut d = doc();
+    assert_eq!(d.vertex_index_areas_in_stack("mesh").unwrap(), ["left"]);
+    // A region area carries over to any mesh; an area no layer reads is not named.
+    let NodeKind::Mesh(m) = &mut d.node_mut("mesh").unwrap().kind else {
+        unreachable!()
+    };
+    m.areas.insert(
+        "left".into(),
+        Area::Region(vec![RegionShape {
+            shape: Shape::Sphere { radius: 1.0 },
+            transform: Transform::default(),
+        }]),
+    );
+    m.areas.insert("unused".into(), Area::Vertices(vec![1]));
+    assert!(d.vertex_index_areas_in_stack("mesh").unwrap().is_empty());
+    assert!(d.vertex_index_areas_in_stack("push").is_err());
+}

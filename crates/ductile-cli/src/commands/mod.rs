@@ -1,6 +1,7 @@
 //! One module per subcommand.
 
 pub mod apply;
+pub mod apply_batch;
 pub mod bench;
 pub mod blend;
 pub mod check;
