@@ -8,7 +8,8 @@
 //! | `identikit-30` | 30 FFSD macros on the head (8,844 welded vertices), full evaluation with normals, 1 thread |
 //! | `mixed-1m/full` | the head split 11×11 (1.07 M welded vertices), 30 mixed layers, full evaluation with normals, 2 threads |
 //! | `mixed-1m/full-1t` | the same on 1 thread (the speed-up is the ratio) |
-//! | `mixed-1m/incremental` | the same stack, one layer's moved state changed, the incremental evaluator |
+//! | `mixed-1m/edit-top` | the same stack, the top layer's moved state changed, the incremental evaluator |
+//! | `mixed-1m/edit-middle` | the same, the 16th of 30 layers changed: the 14 layers above it read what it moved |
 //! | `lattice-1m` | a Bernstein 4×4×4 lattice on 1 M points, bind and deform, 2 threads |
 //! | `batch-200` | the identikit demo applied to 200 head-sized meshes (load, evaluate, write `.glb`), 2 jobs |
 //!
@@ -54,8 +55,10 @@ pub enum Case {
     MixedFull,
     /// The same on one thread.
     MixedFullOneThread,
-    /// The same stack, one layer changed, incremental evaluator, 2 threads.
-    MixedIncremental,
+    /// The same stack, the top layer changed, incremental evaluator, 2 threads.
+    MixedEditTop,
+    /// The same stack, the middle layer changed, incremental evaluator, 2 threads.
+    MixedEditMiddle,
     /// Bernstein 4×4×4 lattice on 1 M points, bind and deform, 2 threads.
     Lattice,
     /// The identikit demo on 200 head-sized meshes, 2 jobs.
@@ -126,11 +129,12 @@ impl std::fmt::Debug for Prepared {
 
 impl Case {
     /// Every case, in the order the suite runs them.
-    pub const ALL: [Case; 6] = [
+    pub const ALL: [Case; 7] = [
         Case::Identikit,
         Case::MixedFull,
         Case::MixedFullOneThread,
-        Case::MixedIncremental,
+        Case::MixedEditTop,
+        Case::MixedEditMiddle,
         Case::Lattice,
         Case::Batch,
     ];
@@ -142,7 +146,8 @@ impl Case {
             Case::Identikit => "identikit-30",
             Case::MixedFull => "mixed-1m/full",
             Case::MixedFullOneThread => "mixed-1m/full-1t",
-            Case::MixedIncremental => "mixed-1m/incremental",
+            Case::MixedEditTop => "mixed-1m/edit-top",
+            Case::MixedEditMiddle => "mixed-1m/edit-middle",
             Case::Lattice => "lattice-1m",
             Case::Batch => "batch-200",
         }
@@ -156,7 +161,7 @@ impl Case {
             Case::MixedFull => 150.0,
             // Half the 2-thread target's 1.8× speed-up: 150 ms × 1.8.
             Case::MixedFullOneThread => 270.0,
-            Case::MixedIncremental => 16.0,
+            Case::MixedEditTop | Case::MixedEditMiddle => 16.0,
             Case::Lattice => 8.0,
             Case::Batch => 10_000.0,
         }
@@ -168,7 +173,8 @@ impl Case {
         match self {
             Case::Identikit => 200,
             Case::MixedFull | Case::MixedFullOneThread => 10,
-            Case::MixedIncremental => 40,
+            Case::MixedEditTop => 40,
+            Case::MixedEditMiddle => 10,
             Case::Lattice => 40,
             Case::Batch => 3,
         }
@@ -218,15 +224,21 @@ impl Case {
                     }),
                 })
             }
-            Case::MixedIncremental => {
+            Case::MixedEditTop | Case::MixedEditMiddle => {
                 let (mut doc, rest) = fixtures.mixed()?;
                 let vertices = rest.welded_positions().len();
                 let layers = doc.mesh(MIXED_NODE)?.stack.len();
                 let mut ev = MeshEvaluator::new(MIXED_NODE, rest);
                 pool.install(|| ev.update(&doc))?;
-                // The middle layer's moved state, alternating between two values: a layer
-                // below others, so those above it that read what it moved are redone too.
-                let name = doc.mesh(MIXED_NODE)?.stack[layers / 2].tool.clone();
+                // A layer's moved state, alternating between two values: the top layer (the
+                // one being worked on), or the middle one, so that the layers above it that
+                // read what it moved are redone too.
+                let edited = if self == Case::MixedEditTop {
+                    layers - 1
+                } else {
+                    layers / 2
+                };
+                let name = doc.mesh(MIXED_NODE)?.stack[edited].tool.clone();
                 let mut flip = false;
                 Ok(Prepared {
                     vertices,

@@ -287,6 +287,17 @@ impl Volume {
         self.shape
             .normalized_distance(self.to_local.transform_point3(p))
     }
+
+    /// A mesh-space box outside which [`Volume::normalized_distance`] is above 1: the shape's
+    /// bounds placed in mesh space ([`Shape::bounds_in`]), padded by 0.1 % of their size and
+    /// of their distance from the origin so that rounding in the transform to the local frame
+    /// cannot bring a point outside the box to distance 1.
+    #[must_use]
+    pub fn cull_box(&self) -> (Vec3, Vec3) {
+        let (lo, hi) = self.shape.bounds_in(&self.to_local.inverse());
+        let pad = (hi - lo) * 1e-3 + (lo.abs().max(hi.abs())) * 1e-3 + Vec3::splat(1e-6);
+        (lo - pad, hi + pad)
+    }
 }
 
 /// A layer's influence, resolved to mesh space and welded vertex indices.
@@ -372,41 +383,70 @@ impl Influence {
             let weights = vec![1.0; indices.len()];
             return Mask { indices, weights };
         }
-        let candidates = area.map_or(n, <[u32]>::len);
-        if candidates >= PARALLEL_THRESHOLD {
-            // Weights in parallel (each vertex's arithmetic unchanged), then kept in order.
-            let weight = |i: u32| (i, self.volume_weight(positions[i as usize]));
-            let all: Vec<(u32, f32)> = match area {
-                Some(area) => area
-                    .par_iter()
-                    .with_min_len(CHUNK)
-                    .filter(|&&i| (i as usize) < n)
-                    .map(|&i| weight(i))
-                    .collect(),
-                None => (0..n as u32)
-                    .into_par_iter()
-                    .with_min_len(CHUNK)
-                    .map(weight)
-                    .collect(),
-            };
-            let (indices, weights) = all.into_iter().filter(|&(_, w)| w > 0.0).unzip();
-            return Mask { indices, weights };
-        }
-        let mut mask = Mask::default();
-        let mut push = |i: u32| {
-            let w = self.volume_weight(positions[i as usize]);
-            if w > 0.0 {
-                mask.indices.push(i);
-                mask.weights.push(w);
+        // Outside every volume's (padded) box the volume weight `g` is exactly 0, so such a
+        // vertex is decided by a box test alone: weight 0, or 1 when inverted (`1 − 0`), the
+        // very bits `volume_weight` gives it.
+        let boxes: Vec<(Vec3, Vec3)> = self.volumes.iter().map(Volume::cull_box).collect();
+        let outside = if self.invert { 1.0 } else { 0.0 };
+        let weight = |p: Vec3| {
+            if boxes
+                .iter()
+                .any(|(lo, hi)| p.cmpge(*lo).all() && p.cmple(*hi).all())
+            {
+                self.volume_weight(p)
+            } else {
+                outside
             }
         };
-        match area {
+        let gather = |ids: &mut dyn Iterator<Item = u32>, mask: &mut Mask| {
+            for i in ids {
+                let w = weight(positions[i as usize]);
+                if w > 0.0 {
+                    mask.indices.push(i);
+                    mask.weights.push(w);
+                }
+            }
+        };
+        let candidates = area.map_or(n, <[u32]>::len);
+        if candidates < PARALLEL_THRESHOLD {
+            let mut mask = Mask::default();
+            match area {
+                Some(area) => gather(
+                    &mut area.iter().copied().filter(|&i| (i as usize) < n),
+                    &mut mask,
+                ),
+                None => gather(&mut (0..n as u32), &mut mask),
+            }
+            return mask;
+        }
+        // Chunks in parallel, each gathering its own part in order, then joined in order.
+        let parts: Vec<Mask> = match area {
             Some(area) => area
-                .iter()
-                .copied()
-                .filter(|&i| (i as usize) < positions.len())
-                .for_each(&mut push),
-            None => (0..positions.len() as u32).for_each(&mut push),
+                .par_chunks(CHUNK)
+                .map(|c| {
+                    let mut m = Mask::default();
+                    gather(&mut c.iter().copied().filter(|&i| (i as usize) < n), &mut m);
+                    m
+                })
+                .collect(),
+            None => (0..n.div_ceil(CHUNK))
+                .into_par_iter()
+                .map(|c| {
+                    let mut m = Mask::default();
+                    let end = ((c + 1) * CHUNK).min(n);
+                    gather(&mut ((c * CHUNK) as u32..end as u32), &mut m);
+                    m
+                })
+                .collect(),
+        };
+        let len = parts.iter().map(Mask::len).sum();
+        let mut mask = Mask {
+            indices: Vec::with_capacity(len),
+            weights: Vec::with_capacity(len),
+        };
+        for p in parts {
+            mask.indices.extend_from_slice(&p.indices);
+            mask.weights.extend_from_slice(&p.weights);
         }
         mask
     }
@@ -621,6 +661,84 @@ mod tests {
             assert!(!expected.is_empty());
             let got: Vec<(u32, f32)> = m.indices.into_iter().zip(m.weights).collect();
             assert_eq!(got, expected);
+        }
+    }
+
+    #[test]
+    fn culled_masks_match_the_per_vertex_weights_bit_for_bit() {
+        // A grid through and around rotated, scaled volumes of every shape, above and below
+        // the parallel threshold; every falloff (a curve with F(0) = 1 weighs points at
+        // distance exactly 1), inverted or not.
+        let grid = |k: usize| -> Vec<Vec3> {
+            let mut v = Vec::new();
+            for i in 0..k {
+                for j in 0..k {
+                    for l in 0..k {
+                        let t = |a: usize| -1.5 + 3.0 * a as f32 / (k - 1) as f32;
+                        v.push(Vec3::new(t(i), t(j), t(l)));
+                    }
+                }
+            }
+            v
+        };
+        let placement = Affine3A::from_scale_rotation_translation(
+            Vec3::new(1.2, 0.7, 0.9),
+            glam::Quat::from_euler(glam::EulerRot::XYZ, 0.4, -0.7, 1.1),
+            Vec3::new(0.1, -0.2, 0.3),
+        );
+        let shapes = [
+            Shape::Sphere { radius: 0.8 },
+            Shape::Box {
+                half_extents: Vec3::new(0.5, 0.3, 0.75),
+            },
+            Shape::Capsule {
+                radius: 0.3,
+                half_height: 0.5,
+            },
+            Shape::Tube {
+                points: vec![
+                    Vec3::new(-0.5, 0.0, 0.0),
+                    Vec3::ZERO,
+                    Vec3::new(0.4, 0.5, 0.1),
+                ],
+                radii: vec![0.2, 0.4, 0.3],
+            },
+        ];
+        let falloffs = [
+            Falloff::None,
+            Falloff::Linear,
+            Falloff::Smooth,
+            Falloff::Curve(SplineControl::constant(1.0)),
+        ];
+        for positions in [grid(12), grid(27)] {
+            for shape in &shapes {
+                let volume = Volume::new(shape.clone(), placement, "v").unwrap();
+                for falloff in &falloffs {
+                    for invert in [false, true] {
+                        let inf = Influence {
+                            volumes: vec![volume.clone()],
+                            area: None,
+                            falloff: falloff.clone(),
+                            inner: 0.3,
+                            invert,
+                        };
+                        let m = inf.mask(&positions);
+                        let expected: Vec<(u32, u32)> = (0..positions.len() as u32)
+                            .map(|i| (i, inf.volume_weight(positions[i as usize])))
+                            .filter(|&(_, w)| w > 0.0)
+                            .map(|(i, w)| (i, w.to_bits()))
+                            .collect();
+                        assert!(!expected.is_empty() && expected.len() < positions.len());
+                        let got: Vec<(u32, u32)> = m
+                            .indices
+                            .iter()
+                            .zip(&m.weights)
+                            .map(|(&i, w)| (i, w.to_bits()))
+                            .collect();
+                        assert_eq!(got, expected, "{shape:?} {falloff:?} invert {invert}");
+                    }
+                }
+            }
         }
     }
 }

@@ -95,10 +95,26 @@ impl<const L: usize, const C: usize> WithSimd for Kernel<'_, L, C> {
             }
             return;
         }
-        let binomial = binomials::<L>().map(|c| simd.splat_f32s(c));
+        // No closures below: they would not inherit the dispatched target features, and
+        // every SIMD operation in them would become a call.
+        let bin = binomials::<L>();
+        let mut binomial = [zero; L];
+        for i in 0..L {
+            binomial[i] = simd.splat_f32s(bin[i]);
+        }
         let one = simd.splat_f32s(1.0);
-        let origin = lat.frame.origin.to_array().map(|c| simd.splat_f32s(c));
-        let rows = lat.rows.map(|r| r.to_array().map(|c| simd.splat_f32s(c)));
+        let o = lat.frame.origin;
+        let origin = [
+            simd.splat_f32s(o.x),
+            simd.splat_f32s(o.y),
+            simd.splat_f32s(o.z),
+        ];
+        let mut rows = [[zero; 3]; 3];
+        for a in 0..3 {
+            for c in 0..3 {
+                rows[a][c] = simd.splat_f32s(lat.rows[a][c]);
+            }
+        }
 
         for (idx, out) in self.active.chunks(lanes).zip(self.out.chunks_mut(lanes)) {
             let n = idx.len();
@@ -109,22 +125,28 @@ impl<const L: usize, const C: usize> WithSimd for Kernel<'_, L, C> {
                 p[1][l] = v.y;
                 p[2][l] = v.z;
             }
-            let x = p.map(|c| simd.partial_load_f32s(&c[..n]));
-            let d = [0, 1, 2].map(|a| simd.sub_f32s(x[a], origin[a]));
+            let mut x = [zero; 3];
+            let mut d = [zero; 3];
+            for a in 0..3 {
+                x[a] = simd.partial_load_f32s(&p[a][..n]);
+                d[a] = simd.sub_f32s(x[a], origin[a]);
+            }
             // u_a = (r_a.x·dx + r_a.y·dy) + r_a.z·dz, unfused: glam's `dot`, bit for bit.
-            let u = rows.map(|r| {
-                simd.add_f32s(
-                    simd.add_f32s(simd.mul_f32s(r[0], d[0]), simd.mul_f32s(r[1], d[1])),
-                    simd.mul_f32s(r[2], d[2]),
-                )
-            });
+            let mut u = [zero; 3];
             let mut uc = [[0.0_f32; MAX_LANES]; 3];
             for a in 0..3 {
+                let r = rows[a];
+                u[a] = simd.add_f32s(
+                    simd.add_f32s(simd.mul_f32s(r[0], d[0]), simd.mul_f32s(r[1], d[1])),
+                    simd.mul_f32s(r[2], d[2]),
+                );
                 simd.partial_store_f32s(&mut uc[a][..n], u[a]);
             }
 
             // Bᵢ(t) = C(n, i) tⁱ (1 − t)ⁿ⁻ⁱ on each axis.
-            let basis = u.map(|t| {
+            let mut basis = [[zero; L]; 3];
+            for a in 0..3 {
+                let t = u[a];
                 let s = simd.sub_f32s(one, t);
                 let mut tp = [one; L];
                 let mut sp = [one; L];
@@ -132,12 +154,10 @@ impl<const L: usize, const C: usize> WithSimd for Kernel<'_, L, C> {
                     tp[i] = simd.mul_f32s(tp[i - 1], t);
                     sp[i] = simd.mul_f32s(sp[i - 1], s);
                 }
-                let mut b = [zero; L];
                 for i in 0..L {
-                    b[i] = simd.mul_f32s(simd.mul_f32s(binomial[i], tp[i]), sp[L - 1 - i]);
+                    basis[a][i] = simd.mul_f32s(simd.mul_f32s(binomial[i], tp[i]), sp[L - 1 - i]);
                 }
-                b
-            });
+            }
 
             let mut acc = [zero; C];
             for k in 0..L {
@@ -161,14 +181,14 @@ impl<const L: usize, const C: usize> WithSimd for Kernel<'_, L, C> {
             }
 
             // Non-rational: X + Σ ΔP B B B; rational: U₀ + Σ W(P − U₀) B B B / Σ W B B B.
-            let moved = if C == 4 {
-                [0, 1, 2].map(|a| simd.add_f32s(origin[a], simd.div_f32s(acc[a], acc[C - 1])))
-            } else {
-                [0, 1, 2].map(|a| simd.add_f32s(x[a], acc[a]))
-            };
             let mut q = [[0.0_f32; MAX_LANES]; 3];
             for a in 0..3 {
-                simd.partial_store_f32s(&mut q[a][..n], moved[a]);
+                let moved = if C == 4 {
+                    simd.add_f32s(origin[a], simd.div_f32s(acc[a], acc[C - 1]))
+                } else {
+                    simd.add_f32s(x[a], acc[a])
+                };
+                simd.partial_store_f32s(&mut q[a][..n], moved);
             }
             for l in 0..n {
                 let u = Vec3::new(uc[0][l], uc[1][l], uc[2][l]);
