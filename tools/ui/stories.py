@@ -17,7 +17,9 @@ pixel for pixel) before redoing them and going on:
 4. technical (a scratch copy of Spot): lattice, shape surface and axial deformation, each
    deformed by a handle drag; the stack reordered by dragging a row; a layer toggled off and
    on; a sphere volume masking the lattice; Ctrl+S; `ductile apply` of the saved scene (the
-   CLI next to the Studio binary) writes OUT_DIR/technical-spot.glb.
+   CLI next to the Studio binary) writes OUT_DIR/technical-spot.glb, then the saved scene is
+   applied in a batch (`ductile apply --input … --out-dir`, 2 jobs) to Spot and four props
+   made from it, written to OUT_DIR/technical-batch/.
 5. identikit (the head): a free point, faces A and B saved as variants, the morph typed to 0
    and 1 (A and B pixel for pixel) and dragged between them.
 6. animate (a scratch copy of MakeHuman's body): a bend keyed straight at frame 0 and bent
@@ -32,6 +34,7 @@ passes; otherwise 1, naming the story and the step. Positions are those of the d
 scenes' default framing. Scratch copies live in a temporary folder (its `assets` linked to
 the repository's), never in the repository.
 """
+import json
 import os
 import shutil
 import subprocess
@@ -528,7 +531,7 @@ def story_technical(studio):
     """The technical artist on Spot: a lattice, a shape surface and an axial deformation
     added and each deformed by dragging a handle; the stack reordered by dragging a row and a
     layer toggled off and on; a sphere volume masking the lattice's layer; Ctrl+S; then
-    `ductile apply` of the saved scene from the command line."""
+    `ductile apply` of the saved scene from the command line, once and in a batch."""
     start = studio.shot("1-start", settle=15.0)
     studio.click(*ADD_MENU)
     studio.click(*MENU["Lattice (Bernstein)"])
@@ -584,6 +587,46 @@ def story_technical(studio):
                          text=True)
     expect(run.returncode == 0 and os.path.exists(out),
            f"ductile apply of the saved scene failed: {run.stderr.strip()}")
+    batch_props(cli, studio)
+
+
+def batch_props(cli, studio):
+    """The saved scene's stack applied in a batch to Spot and four props made from it
+    (scaled copies, as a set of scanned props would differ), two at a time, with a report:
+    every input written once, each a deformed copy of its own input."""
+    props = os.path.join(studio.out_dir, "technical-props")
+    os.makedirs(props, exist_ok=True)
+    spot = os.path.join(ROOT, "assets", "meshes", "spot.obj")
+    with open(spot) as f:
+        lines = f.read().splitlines()
+    for k, (sx, sy, sz) in enumerate([(1.0, 1.0, 1.0), (1.1, 1.0, 1.0), (1.0, 0.9, 1.0),
+                                      (1.0, 1.0, 1.2), (0.95, 1.05, 0.9)]):
+        with open(os.path.join(props, f"prop-{k}.obj"), "w") as f:
+            for line in lines:
+                if line.startswith("v "):
+                    x, y, z = (float(c) for c in line.split()[1:4])
+                    line = f"v {x * sx} {y * sy} {z * sz}"
+                f.write(line + "\n")
+    out_dir = os.path.join(studio.out_dir, "technical-batch")
+    report = os.path.join(studio.out_dir, "technical-batch.jsonl")
+    run = subprocess.run([cli, "apply", studio.project, "--input",
+                          os.path.join(props, "*.obj"), "--out-dir", out_dir, "--jobs", "2",
+                          "--report", report], capture_output=True, text=True)
+    expect(run.returncode == 0, f"the batch failed: {run.stdout}{run.stderr}")
+    expect("batch: 5 done, 0 failed, 0 skipped" in run.stdout, f"the batch: {run.stdout}")
+    with open(report) as f:
+        records = [json.loads(line) for line in f]
+    written = sorted(os.path.basename(r["output"]) for r in records if r["status"] == "done")
+    expect(written == [f"prop-{k}.glb" for k in range(5)], f"the batch wrote {written}")
+    expect(sorted(os.listdir(out_dir)) == written, f"the batch folder holds "
+                                                   f"{sorted(os.listdir(out_dir))}")
+    # One topology, five different shapes: files of one size, no two alike.
+    contents = []
+    for n in written:
+        with open(os.path.join(out_dir, n), "rb") as f:
+            contents.append(f.read())
+    expect(len({len(c) for c in contents}) == 1, "the batch outputs differ in size")
+    expect(len(set(contents)) == 5, "two batch outputs are the same")
 
 
 def stack_row(row, part):
