@@ -279,3 +279,37 @@ fn file_io_in_source_is_caught() {
     assert_eq!(file_io_in("a.rs", "let f = File::open(p);").len(), 1);
     assert!(file_io_in("a.rs", "let profile = 1;").is_empty());
 }
+
+/// The names of the crate's own modules that a source file imports (`use crate::m…`,
+/// `crate::m::` paths and `super::`).
+fn crate_modules_used(source: &str) -> Vec<String> {
+    let mut out: Vec<String> = source
+        .match_indices("crate::")
+        .map(|(i, _)| {
+            source[i + "crate::".len()..]
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect()
+        })
+        .collect();
+    if source.contains("super::") {
+        out.push("super".to_owned());
+    }
+    out.sort();
+    out.dedup();
+    out
+}
+
+#[test]
+fn the_chunking_helpers_depend_on_no_other_core_module() {
+    let text =
+        std::fs::read_to_string(common::root().join("crates/ductile-core/src/chunks.rs")).unwrap();
+    // Its own unit tests may use `super::`; the module itself names no other module.
+    let code = text.split("#[cfg(test)]").next().unwrap_or_default();
+    assert_eq!(crate_modules_used(code), Vec::<String>::new());
+    // And the check itself catches an import.
+    assert_eq!(
+        crate_modules_used("use crate::stack::Stack;\nuse crate::tool::{Tool};"),
+        ["stack", "tool"]
+    );
+}

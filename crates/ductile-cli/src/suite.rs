@@ -23,10 +23,11 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use anyhow::Context as _;
+use ductile_core::chunks::CHUNK;
 use ductile_core::lattice::{ControlEdit, LatticeFrame, LatticeTool};
 use ductile_core::mesh::{RestMesh, Topology};
 use ductile_core::primitives::subdivided_n;
-use ductile_core::stack::{CHUNK, Stack};
+use ductile_core::stack::Stack;
 use ductile_core::tool::{BindInput, Tool};
 use ductile_io::{MeshFormat, embedded};
 use ductile_scene::create::{self, NewTool, NewVolume, Placement, SurfacePoint};
@@ -638,7 +639,7 @@ mod tests {
         // parallel paths run.
         let head = head().unwrap();
         let rest = RestMesh::new(subdivided_n(head.mesh(), 2), "head split 2×2").unwrap();
-        assert!(rest.welded_positions().len() > ductile_core::stack::PARALLEL_THRESHOLD);
+        assert!(rest.welded_positions().len() > ductile_core::chunks::PARALLEL_THRESHOLD);
         let mut doc = mixed_stack(&rest, MIXED_LAYERS);
         let run = |threads: usize, doc: &Document| {
             let pool = rayon::ThreadPoolBuilder::new()

@@ -19,11 +19,12 @@ use glam::{Affine3A, Mat3, Quat, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::chunks::{BIND_CHUNK, active_mask};
 use crate::curve::{CurveBasis, CurveEvaluator, validate_polygon};
 use crate::error::{CoreError, Result, check_finite};
 use crate::frames::{Frame, PolylineIndex, double_reflection, polyline_tangents};
 use crate::influence::Falloff;
-use crate::tool::{BIND_CHUNK, BindInput, Deformer, active_mask, uniform_scale};
+use crate::tool::{BindInput, Deformer, uniform_scale};
 
 /// Samples per control point of a spline axis.
 const SAMPLES_PER_POINT: usize = 16;

@@ -26,9 +26,10 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all, bernstein_all_with_derivative};
+use crate::chunks::{BIND_CHUNK, active_mask};
 use crate::error::{CoreError, Result, check_finite_vec3};
 use crate::frames::PolylineIndex;
-use crate::tool::{BIND_CHUNK, BindInput, Deformer, active_mask};
+use crate::tool::{BindInput, Deformer};
 
 /// Largest number of control points a Bézier polygon may have (degree [`MAX_DEGREE`]).
 pub const MAX_BEZIER_POINTS: usize = MAX_DEGREE + 1;

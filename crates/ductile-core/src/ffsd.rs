@@ -36,8 +36,8 @@ const LANES: usize = 16;
 
 use rayon::prelude::*;
 
+use crate::chunks::{CHUNK, PARALLEL_THRESHOLD};
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
-use crate::stack::{CHUNK, PARALLEL_THRESHOLD};
 use crate::tool::{BindInput, Deformer, uniform_scale};
 
 /// How a control point pushes the surface.

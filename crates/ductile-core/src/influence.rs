@@ -14,9 +14,9 @@ use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::chunks::{CHUNK, PARALLEL_THRESHOLD};
 use crate::error::{CoreError, Result, check_finite};
 use crate::spline::SplineControl;
-use crate::stack::{CHUNK, PARALLEL_THRESHOLD};
 
 /// The shape of an influence volume in its own local frame (centred at the origin).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -11,6 +11,7 @@
 
 pub mod axial;
 pub mod basis;
+pub mod chunks;
 pub mod curve;
 pub mod direct_ffd;
 pub mod dogme;

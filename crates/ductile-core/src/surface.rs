@@ -19,8 +19,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE};
+use crate::chunks::BIND_CHUNK;
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
-use crate::tool::{BIND_CHUNK, BindInput, Deformer};
+use crate::tool::{BindInput, Deformer};
 
 /// The rest plane of a shape surface: `origin + a·u_edge + b·v_edge`, `(a, b) ∈ [0, 1]²`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

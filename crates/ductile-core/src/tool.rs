@@ -37,22 +37,6 @@ pub struct BindInput<'a> {
     pub active: &'a [u32],
 }
 
-/// Vertices per parallel task when a tool binds every vertex on its own (curves, axes,
-/// shape surfaces).
-pub(crate) const BIND_CHUNK: usize = 4096;
-
-/// `mask[v]` is true for the active vertices of `n`.
-#[must_use]
-pub(crate) fn active_mask(n: usize, active: &[u32]) -> Vec<bool> {
-    let mut mask = vec![false; n];
-    for &i in active {
-        if let Some(m) = mask.get_mut(i as usize) {
-            *m = true;
-        }
-    }
-    mask
-}
-
 /// A deformation tool: the bind / deform protocol described in the module documentation.
 pub trait Deformer {
     /// Cached data computed by [`Deformer::bind`].

@@ -43,11 +43,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::Vec3;
 
+use ductile_core::chunks::{CHUNK, PARALLEL_THRESHOLD, map_chunks_at, scatter_at};
 use ductile_core::influence::Mask;
 use ductile_core::mesh::{Deformed, RestMesh, Topology};
-use ductile_core::stack::{
-    CHUNK, Layer, LayerBinding, PARALLEL_THRESHOLD, Recorded, Stack, map_chunks_at, scatter_at,
-};
+use ductile_core::stack::{Layer, LayerBinding, Recorded, Stack};
 use ductile_core::tool::{Tool, ToolBind};
 use rayon::prelude::*;
 

@@ -19,13 +19,14 @@ use petgraph::Directed;
 use petgraph::Direction;
 use petgraph::algo::dinics;
 use petgraph::graph::{Graph, NodeIndex};
+use petgraph::unionfind::UnionFind;
 use petgraph::visit::EdgeRef;
 
 use crate::error::{CoreError, Result};
 use crate::mesh::Topology;
 use crate::sketch::camera::Camera;
 use crate::sketch::partition::Partition;
-use crate::sketch::roi::{VertexGraph, check_positions, edge_key, find};
+use crate::sketch::roi::{VertexGraph, check_positions, edge_key};
 
 /// Screen-space half-width of the fuzzy region around a cut line, in pixels (Kho & Garland
 /// §4.2.1: "we typically adopt a 5 pixel distance limit").
@@ -180,24 +181,22 @@ pub fn cut_with_line(
     // Keep edges that touch a fuzzy triangle.
     edge_tris.retain(|_, ts| ts.iter().any(|&t| fuzzy_flag[t as usize]));
 
-    // Connected fuzzy regions (union-find over fuzzy-fuzzy edges).
+    // Connected fuzzy regions (union–find over fuzzy-fuzzy edges).
     let local: HashMap<u32, usize> = fuzzy.iter().enumerate().map(|(i, &t)| (t, i)).collect();
-    let mut parent: Vec<usize> = (0..fuzzy.len()).collect();
+    let mut regions = UnionFind::<usize>::new(fuzzy.len());
     let mut keys: Vec<u64> = edge_tris.keys().copied().collect();
     keys.sort_unstable();
     for key in &keys {
         let ts = &edge_tris[key];
         let fz: Vec<usize> = ts.iter().filter_map(|t| local.get(t).copied()).collect();
         for w in fz.windows(2) {
-            let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
-            if a != b {
-                parent[a] = b;
-            }
+            regions.union(w[0], w[1]);
         }
     }
-    // Per region: does it come near the drawn segment, and its nearest depth.
+    // Per region that comes near the drawn segment (by its root): its nearest depth, and its
+    // first triangle near the segment, which breaks ties whatever root the union–find picked.
     let reach = FUZZY_DISTANCE_PX;
-    let mut region_depth: HashMap<usize, f32> = HashMap::new();
+    let mut region_depth: HashMap<usize, (f32, usize)> = HashMap::new();
     for (i, &ti) in fuzzy.iter().enumerate() {
         let corners = tris[ti as usize].map(|v| screen[v as usize]);
         let (mut tlo, mut thi, mut dmin) = (f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY);
@@ -206,15 +205,16 @@ pub fn cut_with_line(
             thi = thi.max(c.1);
             dmin = dmin.min(c.2);
         }
-        let root = find(&mut parent, i);
+        let root = regions.find_mut(i);
         if thi >= -reach && tlo <= len + reach {
-            let e = region_depth.entry(root).or_insert(f32::INFINITY);
-            *e = e.min(dmin);
+            // `i` ascends: when a region is first seen here, `i` is its first such triangle.
+            let e = region_depth.entry(root).or_insert((f32::INFINITY, i));
+            e.0 = e.0.min(dmin);
         }
     }
     let Some((&chosen, _)) = region_depth
         .iter()
-        .min_by(|a, b| a.1.total_cmp(b.1).then(a.0.cmp(b.0)))
+        .min_by(|a, b| a.1.0.total_cmp(&b.1.0).then(a.1.1.cmp(&b.1.1)))
     else {
         return Err(CoreError::Cut {
             what: "cut line".to_owned(),
@@ -222,7 +222,7 @@ pub fn cut_with_line(
         });
     };
     let region: Vec<u32> = (0..fuzzy.len())
-        .filter(|&i| find(&mut parent, i) == chosen)
+        .filter(|&i| regions.find_mut(i) == chosen)
         .map(|i| fuzzy[i])
         .collect();
     let mut in_region = vec![false; tris.len()];

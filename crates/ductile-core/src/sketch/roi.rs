@@ -20,6 +20,7 @@
 use std::collections::{HashMap, VecDeque};
 
 use glam::Vec3;
+use petgraph::unionfind::UnionFind;
 
 use crate::error::{CoreError, Result};
 use crate::mesh::Topology;
@@ -149,15 +150,6 @@ impl VertexGraph {
         }
         false
     }
-}
-
-/// Root of `x` in a union–find forest, with path halving.
-pub(crate) fn find(parent: &mut [usize], mut x: usize) -> usize {
-    while parent[x] != x {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    x
 }
 
 /// Checks that `positions` holds one welded position per topological vertex.
@@ -478,21 +470,18 @@ fn cutting_plane(
             }
         }
     }
-    // Loops: connected components of crossed triangles through crossed edges (union-find).
-    let mut parent: Vec<usize> = (0..crossed.len()).collect();
+    // Loops: connected components of crossed triangles through crossed edges.
+    let mut components = UnionFind::<usize>::new(crossed.len());
     for tris in edge_tris.values() {
         for w in tris.windows(2) {
-            let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
-            if a != b {
-                parent[a] = b;
-            }
+            components.union(w[0], w[1]);
         }
     }
     let mut root_loop: HashMap<usize, usize> = HashMap::new();
     let mut loops: Vec<Vec<u32>> = Vec::new();
     let mut tri_loop = vec![0usize; crossed.len()];
     for local in 0..crossed.len() {
-        let r = find(&mut parent, local);
+        let r = components.find_mut(local);
         let next = loops.len();
         let l = *root_loop.entry(r).or_insert(next);
         if l == loops.len() {

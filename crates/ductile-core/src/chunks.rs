@@ -1,0 +1,139 @@
+//! Parallel per-vertex work in chunks: the sizes from which work goes parallel, and helpers
+//! that visit, scatter and gather values at ascending vertex indices in disjoint chunks. The
+//! stack, the influence masks and the tools all use them; this module uses none of them, so
+//! the dependencies run one way (tools → chunks ← stack).
+//!
+//! Every helper gives each element the same single computation whether it runs in parallel
+//! or in order, so results are the same bits on any number of threads.
+
+use rayon::prelude::*;
+
+/// Above this many active vertices a layer deforms (and blends, masks, binds) in parallel
+/// chunks.
+pub const PARALLEL_THRESHOLD: usize = 16_384;
+/// Chunk size for parallel per-vertex work.
+pub const CHUNK: usize = 4_096;
+/// Above this many entries, plain copies (scatter, gather) run in parallel chunks; below
+/// it, waking the pool costs more than the copy (and much more on a loaded machine).
+pub const PARALLEL_COPY_THRESHOLD: usize = 1 << 17;
+
+/// Vertices per parallel task when a tool binds every vertex on its own (curves, axes,
+/// shape surfaces).
+pub const BIND_CHUNK: usize = 4096;
+
+/// `mask[v]` is true for the active vertices of `n`.
+#[must_use]
+pub fn active_mask(n: usize, active: &[u32]) -> Vec<bool> {
+    let mut mask = vec![false; n];
+    for &i in active {
+        if let Some(m) = mask.get_mut(i as usize) {
+            *m = true;
+        }
+    }
+    mask
+}
+
+/// Calls `f(k, &mut values[indices[k]])` for every `k`. When `indices` has at least
+/// [`PARALLEL_COPY_THRESHOLD`] entries and is strictly ascending (as a [`Mask`]'s indices are), the
+/// calls run in parallel chunks of [`CHUNK`] entries, each owning a disjoint range of
+/// `values`; otherwise in order. Each element sees the same single call either way, so a
+/// per-element `f` gives the same bits. Indices must be in range (panics otherwise, like
+/// indexing).
+pub fn for_each_at<T: Send>(
+    values: &mut [T],
+    indices: &[u32],
+    f: impl Fn(usize, &mut T) + Sync + Send,
+) {
+    if indices.len() < PARALLEL_COPY_THRESHOLD {
+        for (k, &i) in indices.iter().enumerate() {
+            f(k, &mut values[i as usize]);
+        }
+        return;
+    }
+    map_chunks_at(values, indices, |k0, chunk, slice| {
+        for (j, &i) in chunk.iter().enumerate() {
+            f(k0 + j, slice.get(i));
+        }
+    });
+}
+
+/// The part of `values` that one chunk of strictly ascending indices owns (see
+/// [`map_chunks_at`]).
+pub struct ChunkValues<'a, T> {
+    slice: &'a mut [T],
+    base: usize,
+}
+
+impl<T> ChunkValues<'_, T> {
+    /// `values[i]`, for an index `i` of the chunk.
+    pub fn get(&mut self, i: u32) -> &mut T {
+        &mut self.slice[i as usize - self.base]
+    }
+}
+
+/// Calls `f(k0, chunk, part)` for consecutive chunks of [`CHUNK`] entries of `indices`
+/// (`k0` the position of the chunk's first entry), giving each the part of `values` its
+/// indices fall in, and returns the results in chunk order. When `indices` is strictly
+/// ascending and in range, the chunks own disjoint parts and run in parallel; otherwise
+/// there is one chunk, the whole list, run in place.
+pub fn map_chunks_at<T: Send, R: Send>(
+    values: &mut [T],
+    indices: &[u32],
+    f: impl Fn(usize, &[u32], &mut ChunkValues<'_, T>) -> R + Sync + Send,
+) -> Vec<R> {
+    let ascending = indices.windows(2).all(|w| w[0] < w[1])
+        && indices.last().is_none_or(|&i| (i as usize) < values.len());
+    if !ascending || indices.len() <= CHUNK {
+        return vec![f(
+            0,
+            indices,
+            &mut ChunkValues {
+                slice: values,
+                base: 0,
+            },
+        )];
+    }
+    let mut parts = Vec::with_capacity(indices.len().div_ceil(CHUNK));
+    let mut rest = values;
+    let mut base = 0_usize;
+    for (c, chunk) in indices.chunks(CHUNK).enumerate() {
+        let end = indices
+            .get((c + 1) * CHUNK)
+            .map_or(base + rest.len(), |&next| next as usize);
+        let (head, tail) = rest.split_at_mut(end - base);
+        parts.push((c * CHUNK, chunk, ChunkValues { slice: head, base }));
+        rest = tail;
+        base = end;
+    }
+    parts
+        .into_par_iter()
+        .map(|(k0, chunk, mut part)| f(k0, chunk, &mut part))
+        .collect()
+}
+
+/// `values[indices[k]] = src[k]` for every `k` (`src` as long as `indices`): a plain loop,
+/// or [`for_each_at`]'s parallel chunks from [`PARALLEL_COPY_THRESHOLD`] entries.
+pub fn scatter_at<T: Copy + Send + Sync>(values: &mut [T], indices: &[u32], src: &[T]) {
+    if indices.len() >= PARALLEL_COPY_THRESHOLD {
+        for_each_at(values, indices, |k, v| *v = src[k]);
+    } else {
+        for (&i, &s) in indices.iter().zip(src) {
+            values[i as usize] = s;
+        }
+    }
+}
+
+/// `values[i]` for every `i` of `indices`, gathered in parallel chunks above
+/// [`PARALLEL_COPY_THRESHOLD`] indices.
+#[must_use]
+pub fn gather_at<T: Copy + Send + Sync>(values: &[T], indices: &[u32]) -> Vec<T> {
+    if indices.len() >= PARALLEL_COPY_THRESHOLD {
+        indices
+            .par_iter()
+            .with_min_len(CHUNK)
+            .map(|&i| values[i as usize])
+            .collect()
+    } else {
+        indices.iter().map(|&i| values[i as usize]).collect()
+    }
+}
