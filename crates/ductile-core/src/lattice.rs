@@ -24,7 +24,7 @@
 use glam::{Affine3A, Vec3, Vec4};
 use serde::{Deserialize, Serialize};
 
-mod bernstein_simd;
+mod simd;
 
 use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all};
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
@@ -540,25 +540,12 @@ impl PreparedLattice {
     /// The same bits as [`PreparedLattice::deform_slice`] gives the point.
     #[must_use]
     pub fn deform_point(&self, x: Vec3) -> Vec3 {
-        if self.bernstein_len().is_some() {
+        if self.has_block_kernel() {
             let mut out = [x];
             self.deform_slice(&[x], &[0], &mut out);
             return out[0];
         }
         self.deform_with(x, Self::tensor)
-    }
-
-    /// `L` when every axis is Bernstein with `L` control points (`2 ≤ L ≤ 8`): the lattices
-    /// the block kernel ([`bernstein_simd`]) evaluates.
-    fn bernstein_len(&self) -> Option<usize> {
-        let l = self.counts[0];
-        (self.counts.iter().all(|&c| c == l)
-            && (2..=8).contains(&l)
-            && self
-                .axes
-                .iter()
-                .all(|a| matches!(a, AxisBasis::Bernstein(n) if n + 1 == l)))
-        .then_some(l)
     }
 
     /// The number of non-zero basis functions per axis when it is the same on all three.
@@ -607,18 +594,12 @@ impl PreparedLattice {
         true
     }
 
-    /// Deforms `active` vertices of `positions` into `out`. Bernstein lattices go through the
-    /// block kernel (many points per SIMD register, [`bernstein_simd`]), others point by point.
+    /// Deforms `active` vertices of `positions` into `out`. Lattices with the same number of
+    /// basis functions (2 to 8) on every axis go through the block kernels (a point per SIMD
+    /// lane, [`simd`]); others point by point.
     pub fn deform_slice(&self, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
-        match self.bernstein_len() {
-            Some(2) => return self.deform_slice_bernstein::<2>(positions, active, out),
-            Some(3) => return self.deform_slice_bernstein::<3>(positions, active, out),
-            Some(4) => return self.deform_slice_bernstein::<4>(positions, active, out),
-            Some(5) => return self.deform_slice_bernstein::<5>(positions, active, out),
-            Some(6) => return self.deform_slice_bernstein::<6>(positions, active, out),
-            Some(7) => return self.deform_slice_bernstein::<7>(positions, active, out),
-            Some(8) => return self.deform_slice_bernstein::<8>(positions, active, out),
-            _ => {}
+        if self.deform_slice_blocks(positions, active, out) {
+            return;
         }
         match self.uniform_len() {
             Some(2) => self.deform_slice_with(positions, active, out, Self::tensor_fixed::<2>),
