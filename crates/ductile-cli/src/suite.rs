@@ -199,31 +199,11 @@ impl Case {
         match self {
             Case::Identikit => {
                 let (doc, rest) = identikit_30()?;
-                let stack = doc.resolve_stack("head", &rest)?;
-                let (vertices, layers) = (rest.welded_positions().len(), stack.layers.len());
-                Ok(Prepared {
-                    vertices,
-                    layers,
-                    threads,
-                    run: Box::new(move || {
-                        pool.install(|| std::hint::black_box(stack.evaluate(&rest)))?;
-                        Ok(())
-                    }),
-                })
+                full_evaluation(&doc, "head", rest, pool)
             }
             Case::MixedFull | Case::MixedFullOneThread => {
                 let (doc, rest) = fixtures.mixed()?;
-                let stack: Stack = doc.resolve_stack(MIXED_NODE, &rest)?;
-                let (vertices, layers) = (rest.welded_positions().len(), stack.layers.len());
-                Ok(Prepared {
-                    vertices,
-                    layers,
-                    threads,
-                    run: Box::new(move || {
-                        pool.install(|| std::hint::black_box(stack.evaluate(&rest)))?;
-                        Ok(())
-                    }),
-                })
+                full_evaluation(&doc, MIXED_NODE, rest, pool)
             }
             Case::MixedEditTop | Case::MixedEditMiddle => {
                 let (mut doc, rest) = fixtures.mixed()?;
@@ -338,6 +318,26 @@ impl Case {
             target_ms: self.target_ms(),
         })
     }
+}
+
+/// The full evaluation of mesh node `node`'s stack (resolved once, untimed): bind every
+/// layer, deform, normals, in `pool`.
+fn full_evaluation(
+    doc: &Document,
+    node: &str,
+    rest: RestMesh,
+    pool: rayon::ThreadPool,
+) -> anyhow::Result<Prepared> {
+    let stack: Stack = doc.resolve_stack(node, &rest)?;
+    Ok(Prepared {
+        vertices: rest.welded_positions().len(),
+        layers: stack.layers.len(),
+        threads: pool.current_num_threads(),
+        run: Box::new(move || {
+            pool.install(|| std::hint::black_box(stack.evaluate(&rest)))?;
+            Ok(())
+        }),
+    })
 }
 
 /// The peak resident memory of this process (`VmHWM` of `/proc/self/status`, Linux), in
