@@ -317,11 +317,13 @@ impl Deformer for AxialTool {
             for (i, p) in pts.iter().enumerate() {
                 check_finite(|| format!("{w}: point {i}: twist"), p.twist)?;
                 check_finite(|| format!("{w}: point {i}: scale"), p.scale)?;
-                if p.scale <= 0.0 {
+                // A ratio: the deformed over the rest scale multiplies offsets from the
+                // axis, so both stay within six orders of magnitude of 1.
+                if !(1e-6..=1e6).contains(&p.scale) {
                     return Err(CoreError::OutOfRange {
                         what: format!("{w}: point {i}: scale"),
                         value: f64::from(p.scale),
-                        expected: "must be > 0",
+                        expected: "must be in [1e-6, 1e6]",
                     });
                 }
             }

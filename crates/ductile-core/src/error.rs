@@ -151,26 +151,51 @@ pub enum CoreError {
 /// Shorthand for results in this crate.
 pub type Result<T, E = CoreError> = std::result::Result<T, E>;
 
-/// Returns an error naming `what` when `value` is NaN or infinite.
+/// The largest magnitude of a tool parameter or a mesh coordinate, in scene units: ±10⁹
+/// (a billion metres when the unit is the metre), far beyond any model, so that squared
+/// distances (≤ 10¹⁸·3) and the products the deformers form stay finite in `f32`, whose
+/// range ends at 3.4·10³⁸. Values beyond it are refused where they are read (issue 14: every
+/// deformer maps finite input to finite output or refuses its parameters).
+pub const MAX_MAGNITUDE: f32 = 1e9;
+
+/// The smallest width a deformer accepts (FFSD's α and ε, in scene units): 10⁻⁶, a
+/// micrometre when the unit is the metre. Narrower Gaussians overflow `f32` in
+/// `1 / (2ε²)` and turn into NaN at their centre.
+pub const MIN_WIDTH: f32 = 1e-6;
+
+/// Returns an error naming `what` when `value` is NaN or infinite, or its magnitude exceeds
+/// [`MAX_MAGNITUDE`].
 pub fn check_finite(what: impl FnOnce() -> String, value: f32) -> Result<()> {
-    if value.is_finite() {
-        Ok(())
-    } else {
+    if !value.is_finite() {
         Err(CoreError::NotFinite {
             what: what(),
             value: value.to_string(),
         })
+    } else if value.abs() > MAX_MAGNITUDE {
+        Err(beyond_range(what(), value.to_string()))
+    } else {
+        Ok(())
     }
 }
 
-/// Returns an error naming `what` when any component of `v` is NaN or infinite.
+fn beyond_range(what: String, value: String) -> CoreError {
+    CoreError::Degenerate {
+        what,
+        problem: format!("{value} lies beyond ±1e9, the range Ductile computes in"),
+    }
+}
+
+/// Returns an error naming `what` when any component of `v` is NaN or infinite, or its
+/// magnitude exceeds [`MAX_MAGNITUDE`].
 pub fn check_finite_vec3(what: impl FnOnce() -> String, v: glam::Vec3) -> Result<()> {
-    if v.is_finite() {
-        Ok(())
-    } else {
+    if !v.is_finite() {
         Err(CoreError::NotFinite {
             what: what(),
             value: format!("{v}"),
         })
+    } else if v.abs().max_element() > MAX_MAGNITUDE {
+        Err(beyond_range(what(), format!("{v}")))
+    } else {
+        Ok(())
     }
 }

@@ -105,11 +105,11 @@ impl ControlPoint {
         check_finite(|| format!("{what}: gamma"), self.gamma)?;
         for (name, v) in [("alpha", self.alpha), ("epsilon", self.epsilon)] {
             check_finite(|| format!("{what}: {name}"), v)?;
-            if v <= 0.0 {
+            if v < crate::error::MIN_WIDTH {
                 return Err(CoreError::OutOfRange {
                     what: format!("{what}: {name}"),
                     value: f64::from(v),
-                    expected: "must be > 0",
+                    expected: "must be at least 1e-6 (a width in scene units)",
                 });
             }
         }
@@ -373,8 +373,12 @@ impl PreparedPoint {
         let d2 = Lanes3::splat(self.centre).sub(*v).length_squared();
         let e = (pow_half(d2, self.half_alpha) - Lane::splat(self.anchor_pow))
             * Lane::splat(self.inv_two_eps2);
+        let w = (-e).exp();
+        // Far beyond the point's reach both powers can overflow (∞ − ∞ = NaN, for a large α
+        // on a large mesh): the weight there is 0, as the Gaussian's limit is.
+        let w = w.simd_eq(w).select(w, Lane::ZERO);
         v.sub(Lanes3::splat(self.target))
-            .scale(Lane::splat(self.gamma) * (-e).exp())
+            .scale(Lane::splat(self.gamma) * w)
     }
 }
 

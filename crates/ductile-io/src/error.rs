@@ -237,6 +237,21 @@ pub enum IoError {
         /// The version found.
         found: u64,
     },
+    /// A version 1 history file holds an operation that came with version 2 (keys, the
+    /// timeline, variants): the file's version is wrong, or it was edited by hand.
+    #[error(
+        "{}: step {step} is a {operation} operation, which came with history version 2; \
+         a version 1 file cannot hold it (set `version: 2` if the file is otherwise right)",
+        path.display()
+    )]
+    OperationTooNew {
+        /// The file.
+        path: PathBuf,
+        /// The step (1-based).
+        step: usize,
+        /// The operation's name as written in the file.
+        operation: &'static str,
+    },
     /// The scene a history file refers to as its base is not the one the history was
     /// recorded on (its document's hash differs).
     #[error(

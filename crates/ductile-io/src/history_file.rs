@@ -43,7 +43,7 @@ pub enum Base {
 /// The on-disk layout of versions 1 and 2 (2 may hold the time operations; the layout is
 /// the same).
 #[derive(Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(rename = "History", deny_unknown_fields)]
 struct HistoryV1 {
     version: u64,
     base: Base,
@@ -85,7 +85,7 @@ pub fn is_history_text(text: &str) -> bool {
 /// cannot be read.
 #[must_use]
 pub fn is_history_file(path: impl AsRef<Path>) -> bool {
-    std::fs::read_to_string(path).is_ok_and(|t| is_history_text(&t))
+    crate::read_text_file(path.as_ref()).is_ok_and(|t| is_history_text(&t))
 }
 
 /// The canonical hash of a document: BLAKE3 of its compact RON text (`ron::to_string`),
@@ -170,6 +170,17 @@ pub fn parse_history(text: &str, path: &Path) -> Result<LoadedHistory> {
             });
         }
     };
+    if version == 1 {
+        for (k, entry) in file.entries.iter().enumerate() {
+            if let Some(operation) = version_2_operation(&entry.op) {
+                return Err(IoError::OperationTooNew {
+                    path: path.to_owned(),
+                    step: k + 1,
+                    operation,
+                });
+            }
+        }
+    }
     let (base, mesh_root) = match &file.base {
         Base::Inline(doc) => (doc.clone(), path.to_owned()),
         Base::Reference { path: rel, hash } => {
@@ -217,10 +228,25 @@ pub fn parse_history(text: &str, path: &Path) -> Result<LoadedHistory> {
     })
 }
 
+/// The name of `op`'s kind when it (or a member of its group) came with history version 2.
+fn version_2_operation(op: &ductile_history::operation::Operation) -> Option<&'static str> {
+    use ductile_history::operation::Operation as O;
+    match op {
+        O::SetKey { .. } => Some("SetKey"),
+        O::MoveKey { .. } => Some("MoveKey"),
+        O::SetTrack { .. } => Some("SetTrack"),
+        O::SetTimeline { .. } => Some("SetTimeline"),
+        O::SetVariant { .. } => Some("SetVariant"),
+        O::RenameVariant { .. } => Some("RenameVariant"),
+        O::Group { ops, .. } => ops.iter().find_map(version_2_operation),
+        _ => None,
+    }
+}
+
 /// Reads a history file and resolves its base (without replaying it).
 pub fn read_history(path: impl AsRef<Path>) -> Result<LoadedHistory> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|source| IoError::Read {
+    let text = crate::read_text_file(path).map_err(|source| IoError::Read {
         path: path.to_owned(),
         source,
     })?;

@@ -12,7 +12,8 @@
 //!   ([`read_history`], [`save_history`]);
 //! * [`project`]: Studio projects, a scene file with its history beside it ([`Project`]:
 //!   open, save, save as with mesh sources rewritten, import, export), and the embedded
-//!   default scene ([`embedded`]).
+//!   default scene ([`embedded`]);
+//! * [`recovery`]: the Studio's autosave of unsaved work and its recovery after a crash.
 //!
 //! Meshes can also be decoded from memory ([`load_rest_mesh_from_bytes`]).
 //!
@@ -27,6 +28,7 @@ pub mod gltf_buffers;
 pub mod history_file;
 pub mod mesh;
 pub mod project;
+pub mod recovery;
 pub mod scene;
 
 use std::io::Write as _;
@@ -51,6 +53,88 @@ pub use scene::{
     LoadedMesh, LoadedScene, check_history, check_scene, load_scene, parse_scene, read_scene,
     save_scene,
 };
+
+/// The most bytes Ductile reads from one scene, history or mesh file: 4 GiB, far above a
+/// real file (a ten-million-vertex mesh with normals, UVs and indices takes about 0.5 GB).
+pub const MAX_FILE_BYTES: u64 = 4 << 30;
+
+/// Reads the whole of the regular file `path`, refusing anything else before opening it: a
+/// FIFO would block the open forever, a device such as `/dev/zero` would be read until
+/// memory runs out, a folder cannot be read. A file larger than [`MAX_FILE_BYTES`] is
+/// refused too. Scene, history and mesh files are all read through here, so a hostile
+/// scene naming `/dev/zero` as its mesh or base gets an error, not a hang.
+///
+/// # Errors
+/// The operating system's error, or [`std::io::ErrorKind::InvalidInput`] naming what the
+/// path is when it is not a regular file or is too large.
+pub fn read_file(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read as _;
+    let kind = std::fs::metadata(path)?.file_type();
+    if !kind.is_file() {
+        return Err(not_regular(kind));
+    }
+    let mut file = std::fs::File::open(path)?;
+    // The path may have been swapped between the two calls: check the open file itself.
+    let meta = file.metadata()?;
+    if !meta.file_type().is_file() {
+        return Err(not_regular(meta.file_type()));
+    }
+    let mut bytes = Vec::new();
+    (&mut file)
+        .take(MAX_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("the file is larger than the limit of {MAX_FILE_BYTES} bytes"),
+        ));
+    }
+    Ok(bytes)
+}
+
+/// [`read_file`] as UTF-8 text (scene and history files).
+///
+/// # Errors
+/// As [`read_file`], and [`std::io::ErrorKind::InvalidData`] when the file is not UTF-8.
+pub fn read_text_file(path: &Path) -> std::io::Result<String> {
+    String::from_utf8(read_file(path)?).map_err(|e| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "the file is not UTF-8 text (byte {})",
+                e.utf8_error().valid_up_to()
+            ),
+        )
+    })
+}
+
+fn not_regular(kind: std::fs::FileType) -> std::io::Error {
+    std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        format!("it is {}, not a regular file", file_kind(kind)),
+    )
+}
+
+/// What a file that is not a regular file is, in words.
+fn file_kind(kind: std::fs::FileType) -> &'static str {
+    if kind.is_dir() {
+        return "a folder";
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt as _;
+        if kind.is_fifo() {
+            return "a FIFO (named pipe)";
+        }
+        if kind.is_char_device() || kind.is_block_device() {
+            return "a device";
+        }
+        if kind.is_socket() {
+            return "a socket";
+        }
+    }
+    "a special file"
+}
 
 /// Writes `bytes` to `path` atomically: into a temporary file in the same directory, flushed
 /// to disk, then renamed over `path`, and the directory flushed so the rename survives a

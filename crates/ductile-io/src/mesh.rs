@@ -120,7 +120,7 @@ impl MeshFormat {
 /// Loads the mesh `r` refers to, as stored (not yet validated or welded).
 pub fn load_mesh(r: &MeshRef) -> Result<Mesh> {
     let format = MeshFormat::from_path(&r.path)?;
-    let bytes = std::fs::read(&r.path).map_err(|source| IoError::Read {
+    let bytes = crate::read_file(&r.path).map_err(|source| IoError::Read {
         path: r.path.clone(),
         source,
     })?;
@@ -309,21 +309,23 @@ fn load_obj(bytes: &[u8], path: &Path, select: Option<&str>) -> Result<Mesh> {
         ignore_points: true,
         ignore_lines: true,
     };
-    // Materials are not needed: never open .mtl files.
-    let (models, _) = tobj::load_obj_buf(&mut reader, &options, |_| {
-        Err(tobj::LoadError::OpenFileFailed)
-    })
-    .map_err(|source| match obj_bad_line(bytes) {
-        Some((line, text, problem)) => IoError::ObjLine {
+    // Every line is checked before tobj reads the file: tobj 4.0.5 turns a face index 0
+    // into an index before the first vertex and panics on it (found by the obj fuzzer).
+    if let Some((line, text, problem)) = obj_bad_line(bytes) {
+        return Err(IoError::ObjLine {
             path: path.to_owned(),
             line,
             text,
             problem,
-        },
-        None => IoError::Obj {
-            path: path.to_owned(),
-            source,
-        },
+        });
+    }
+    // Materials are not needed: never open .mtl files.
+    let (models, _) = tobj::load_obj_buf(&mut reader, &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|source| IoError::Obj {
+        path: path.to_owned(),
+        source,
     })?;
     if let Some(name) = select
         && !models.iter().any(|m| m.name == name)
@@ -372,8 +374,62 @@ fn gltf_error(path: &Path) -> impl FnOnce(gltf::Error) -> IoError + '_ {
     }
 }
 
+/// Refuses a primitive whose attributes (or morph targets) name an accessor the file does not
+/// have, before the gltf crate's validation reads it.
+fn check_attribute_accessors(root: &gltf::json::Root, path: &Path) -> Result<()> {
+    let count = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let targets = primitive
+                .targets
+                .iter()
+                .flatten()
+                .flat_map(|t| [t.positions, t.normals, t.tangents].into_iter().flatten());
+            let bad = primitive
+                .attributes
+                .values()
+                .copied()
+                .chain(primitive.indices)
+                .chain(targets)
+                .find(|a| a.value() >= count);
+            if let Some(a) = bad {
+                return Err(IoError::GltfStructure {
+                    path: path.to_owned(),
+                    problem: format!(
+                        "mesh {m}, primitive {p} refers to accessor {}, but the file has {count} \
+                         accessors",
+                        a.value()
+                    ),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 fn load_gltf(bytes: &[u8], path: &Path, base: Option<&Path>, select: Option<&str>) -> Result<Mesh> {
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(bytes).map_err(gltf_error(path))?;
+    // gltf 1.4.1 subtracts the header's size from the declared length unchecked
+    // (binary.rs:252): a length below 12 overflowed (a panic where overflow is checked).
+    if let Some(header) = bytes.strip_prefix(b"glTF")
+        && let Some(length) = header.get(4..8)
+    {
+        let length = u32::from_le_bytes([length[0], length[1], length[2], length[3]]);
+        if length < 12 {
+            return Err(IoError::GltfStructure {
+                path: path.to_owned(),
+                problem: format!(
+                    "the GLB header declares a total length of {length} bytes, less than the \
+                     12-byte header itself"
+                ),
+            });
+        }
+    }
+    let raw = gltf::Gltf::from_slice_without_validation(bytes).map_err(gltf_error(path))?;
+    // The gltf crate's own validation indexes the POSITION accessor without a bounds check
+    // (gltf-json 1.4.1, mesh.rs:151): a file naming a missing accessor made it panic.
+    check_attribute_accessors(raw.document.as_json(), path)?;
+    let blob = raw.blob;
+    let document = gltf::Document::from_json(raw.document.into_json()).map_err(gltf_error(path))?;
     let buffers = crate::gltf_buffers::load_buffers(&document, base, blob, path)?;
 
     // Mesh instances with their world transforms.
@@ -500,6 +556,11 @@ pub const MAX_ACCESSOR_ELEMENTS: usize = 1 << 27;
 fn check_layout(a: &gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> std::result::Result<(), String> {
     let what = format!("accessor {}", a.index());
     let count = a.count();
+    // The gltf crate's reader computes `count - 1` unchecked (found by the gltf fuzzer), and
+    // glTF 2.0 requires at least one element (accessor.count ≥ 1).
+    if count == 0 {
+        return Err(format!("{what} has 0 elements; glTF requires at least 1"));
+    }
     if count > MAX_ACCESSOR_ELEMENTS {
         return Err(format!(
             "{what} has {count} elements, more than the limit of {MAX_ACCESSOR_ELEMENTS}"
@@ -548,6 +609,12 @@ fn check_layout(a: &gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> std::result::Res
     }
     if let Some(sparse) = a.sparse() {
         let n = sparse.count();
+        // As for `count`: the reader computes `n - 1` unchecked; glTF requires n ≥ 1.
+        if n == 0 {
+            return Err(format!(
+                "{what} has a sparse part of 0 values; glTF requires at least 1"
+            ));
+        }
         if n > count {
             return Err(format!(
                 "{what} has {n} sparse values but only {count} elements"

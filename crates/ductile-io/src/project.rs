@@ -218,7 +218,7 @@ impl Project {
     /// loaded) name the file.
     pub fn open(path: impl AsRef<Path>) -> Result<(Self, Vec<ProjectWarning>)> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| IoError::Read {
+        let text = crate::read_text_file(path).map_err(|source| IoError::Read {
             path: path.to_owned(),
             source,
         })?;
@@ -275,6 +275,14 @@ impl Project {
             embedded: BTreeMap::new(),
             cache: BTreeMap::new(),
         })
+    }
+
+    /// The file the project was opened from or last saved to (for an unsaved project, the
+    /// name it was created under): what names it in errors, and its recovery file
+    /// ([`crate::recovery::recovery_path`]).
+    #[must_use]
+    pub fn origin(&self) -> &Path {
+        &self.origin
     }
 
     /// The scene file the project is saved to, if any.

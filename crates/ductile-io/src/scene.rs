@@ -45,7 +45,7 @@ fn present<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Err
 
 /// The on-disk layout of version 1: the document's fields plus `version`.
 #[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(rename = "Scene", deny_unknown_fields)]
 struct SceneV1 {
     #[allow(dead_code)]
     version: u64,
@@ -57,7 +57,7 @@ struct SceneV1 {
 
 /// The on-disk layout of version 2: version 1 plus the animation and the variants.
 #[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(rename = "Scene", deny_unknown_fields)]
 struct SceneV2 {
     #[allow(dead_code)]
     version: u64,
@@ -185,7 +185,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Document> {
 /// Reads and parses a scene file without checking the document or loading meshes.
 pub fn read_scene(path: impl AsRef<Path>) -> Result<Document> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|source| IoError::Read {
+    let text = crate::read_text_file(path).map_err(|source| IoError::Read {
         path: path.to_owned(),
         source,
     })?;

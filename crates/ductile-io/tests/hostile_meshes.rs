@@ -245,3 +245,87 @@ fn obj_errors_name_the_line() {
         assert!(e.ends_with(expected), "{e}");
     }
 }
+
+/// Runs `f` on another thread and fails the test when it takes more than ten seconds (a
+/// read of a FIFO blocks forever, one of `/dev/zero` runs until memory is exhausted).
+fn within_ten_seconds<T: Send + 'static>(what: &str, f: impl FnOnce() -> T + Send + 'static) -> T {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(f());
+    });
+    rx.recv_timeout(std::time::Duration::from_secs(10))
+        .unwrap_or_else(|_| panic!("{what}: still reading after ten seconds"))
+}
+
+#[cfg(unix)]
+#[test]
+fn scenes_histories_and_meshes_naming_special_files_are_refused_not_read() {
+    // A scene's mesh source, a history's base scene, or the file given on the command line
+    // may name a device, a FIFO or a folder: the read used to hang (FIFO) or run until memory
+    // ran out (/dev/zero).
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe.obj");
+    let have_fifo = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .is_ok_and(|s| s.success());
+    std::os::unix::fs::symlink("/dev/zero", dir.path().join("zero.obj")).unwrap();
+    std::fs::create_dir(dir.path().join("folder.obj")).unwrap();
+    let mut sources = vec![("zero.obj", "a device"), ("folder.obj", "a folder")];
+    if have_fifo {
+        sources.push(("pipe.obj", "a FIFO"));
+    }
+    for (source, what) in sources {
+        // As a scene's mesh source.
+        let scene = dir.path().join(format!("{source}.ron"));
+        std::fs::write(
+            &scene,
+            format!("(version: 2, nodes: [(name: \"m\", kind: Mesh((source: \"{source}\")))])"),
+        )
+        .unwrap();
+        let err = within_ten_seconds(source, move || {
+            ductile_io::load_scene(&scene)
+                .map(|_| ())
+                .unwrap_err()
+                .to_string()
+        });
+        assert!(
+            err.contains(source) && err.contains(what),
+            "{source}: {err}"
+        );
+        // As the scene, history or mesh file itself.
+        let path = dir.path().join(source);
+        let err = within_ten_seconds(source, move || {
+            ductile_io::read_scene(&path)
+                .map(|_| ())
+                .unwrap_err()
+                .to_string()
+        });
+        assert!(err.contains(what), "{source}: {err}");
+        let path = dir.path().join(source);
+        let err = within_ten_seconds(source, move || {
+            ductile_io::read_history(&path)
+                .map(|_| ())
+                .unwrap_err()
+                .to_string()
+        });
+        assert!(err.contains(what), "{source}: {err}");
+    }
+    // As a history's base scene.
+    let history = dir.path().join("h.history.ron");
+    std::fs::write(
+        &history,
+        "(version: 1, base: Reference(path: \"zero.obj\", hash: \"00\"), entries: [])",
+    )
+    .unwrap();
+    let err = within_ten_seconds("base", move || {
+        ductile_io::read_history(&history)
+            .map(|_| ())
+            .unwrap_err()
+            .to_string()
+    });
+    assert!(
+        err.contains("zero.obj") && err.contains("a device"),
+        "{err}"
+    );
+}

@@ -1,0 +1,4 @@
+//! libFuzzer target: [`ductile_tests::fuzz::history`].
+#![no_main]
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| ductile_tests::fuzz::history(data));
