@@ -85,7 +85,10 @@ def main():
     display = ":%d" % (90 + os.getpid() % 100)
     xvfb = subprocess.Popen(["Xvfb", display, "-screen", "0", f"{WIDTH}x{HEIGHT}x24"],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    env = dict(os.environ, DISPLAY=display)
+    # The Studio is killed at the end with unsaved edits: its recovery file goes to a folder
+    # of this run, not to the user's.
+    recovery = os.path.join(os.path.abspath(out_dir), "recovery")
+    env = dict(os.environ, DISPLAY=display, DUCTILE_RECOVERY_DIR=recovery)
     app = None
     try:
         time.sleep(2)

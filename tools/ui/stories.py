@@ -27,6 +27,8 @@ pixel for pixel) before redoing them and going on:
    animation (copied to OUT_DIR/animate-animation.glb), whose middle frame keeps the limb
    length (`limb.py` reads the file).
 7. review: the history the animate story saved, opened, stepped through and played.
+8. crash: an edit autosaved, the Studio killed, the work recovered at the next start (and
+   headless with `--recover --screenshot`).
 
 Screenshots of every step are written to OUT_DIR as PNG. Exits 0 only when every story
 passes; otherwise 1, naming the story and the step. Positions are those of the default
@@ -61,6 +63,9 @@ MENU = {
     "Axial deformation": (136, 117),
     "Sphere volume": (127, 342),
 }
+# The offer to recover unsaved work (centred in the window) and its Recover button.
+OFFER = (440, 330, 840, 470)
+RECOVER = (504, 450)
 FILE_MENU = (19, 11)
 # Rows of the File menu.
 FILE = {"Export animation": (73, 171)}
@@ -88,12 +93,23 @@ class Studio:
         self.binary = binary
         self.project = project
         self.display = display
-        self.xvfb = subprocess.Popen(["Xvfb", self.display, "-screen", "0",
+        # -noreset: the X server stays as it is when its last client goes (a story may kill
+        # the Studio and start it again on the same display).
+        self.xvfb = subprocess.Popen(["Xvfb", self.display, "-noreset", "-screen", "0",
                                       f"{WIDTH}x{HEIGHT}x24"],
                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        self.env = dict(os.environ, DISPLAY=self.display)
+        # Every story kills its Studio, which leaves a recovery file when there are unsaved
+        # edits: each story gets its own recovery folder, so that none offers another's work.
+        self.recovery = os.path.join(out_dir, f"{story}-recovery")
+        shutil.rmtree(self.recovery, ignore_errors=True)
+        self.env = dict(os.environ, DISPLAY=self.display, DUCTILE_RECOVERY_DIR=self.recovery)
         time.sleep(2)
         self.log = open(os.path.join(out_dir, f"{story}-studio.log"), "w")
+        self.start(args)
+
+    def start(self, args):
+        """Starts the Studio (again) and waits for its window."""
+        binary, story = self.binary, self.story
         self.app = subprocess.Popen([binary, "--size", f"{WIDTH}x{HEIGHT}", *args],
                                     env=self.env, stdout=self.log, stderr=subprocess.STDOUT,
                                     cwd=ROOT)
@@ -473,6 +489,46 @@ def story_animate(studio):
     shutil.copy(scene, os.path.join(studio.out_dir, "animate.ron"))
 
 
+def story_crash(studio):
+    """Lost work (issue 14): an identikit slider moved, the Studio killed (SIGKILL, as a
+    crash or a power cut would end it) after its autosave; started again, it offers the
+    unsaved work, and Recover brings the face back, unsaved. Then headless: `--recover
+    --screenshot` restores the same face without a window to answer in."""
+    start = studio.shot("1-start", settle=20.0)
+    studio.drag([(916, 227), (961, 227)], steps=6)
+    studio.key("Escape")
+    studio.key("Escape")
+    edited = studio.shot("2-edited", settle=3.0)  # the autosave runs every second here
+    expect(differing(start, edited) > 300, "the brows slider did not change the head")
+    files = [f for f in os.listdir(studio.recovery) if f.endswith(".recovery.history.ron")]
+    expect(len(files) == 1, f"no recovery file was written to {studio.recovery}: {files}")
+    studio.app.kill()
+    studio.app.wait()
+    time.sleep(1.0)
+    expect(os.listdir(studio.recovery) == files, "the kill did not leave the recovery file")
+    studio.start([])
+    offer = studio.shot("3-offer", settle=20.0)
+    expect(differing(start, offer, OFFER) > 1000, "no offer to recover the unsaved work")
+    studio.click(*RECOVER)
+    studio.key("Escape")
+    recovered = studio.shot("4-recovered", settle=4.0)
+    expect(differing(edited, recovered) < 200,
+           "after Recover the head is not the one edited before the kill")
+    studio.app.kill()
+    studio.app.wait()
+    # Headless, as a script would: no window to answer in, so --recover takes it at once.
+    out = os.path.join(studio.out_dir, f"{studio.story}-5-headless.png")
+    subprocess.run([studio.binary, "--size", f"{WIDTH}x{HEIGHT}", "--recover",
+                    "--screenshot", out, "--frames", "40"], env=studio.env, check=True,
+                   stdout=studio.log, stderr=subprocess.STDOUT, cwd=ROOT, timeout=300)
+    expect(os.path.exists(out), "--recover --screenshot wrote no picture")
+    studio.log.flush()
+    with open(os.path.join(studio.out_dir, f"{studio.story}-studio.log")) as f:
+        recovered = f.read().count("recovered 1 step of unsaved work")
+    expect(recovered == 2, f"the headless run did not recover the step ({recovered} of 2 "
+                           "recoveries logged)")
+
+
 def story_identikit(studio):
     """The forensic artist (the README's first command): a free FFSD point where no macro
     reaches, two faces from the identikit sliders saved as variants A and B, then the A/B
@@ -703,6 +759,7 @@ STORIES = [
     ("identikit", [], story_identikit, None),
     ("animate", [], story_animate, "scenes/makehuman-body.ron"),
     ("review", [], story_review, "animate"),
+    ("crash", ["--autosave-seconds", "1"], story_crash, None),
 ]
 
 

@@ -234,6 +234,7 @@ pub fn run_actions(
     mut edits: MessageWriter<DocumentCommand>,
     mut exit: MessageWriter<AppExit>,
     mut export: ResMut<ExportJob>,
+    mut autosave: ResMut<crate::autosave::Autosave>,
 ) {
     let actions: Vec<StudioAction> = actions.read().cloned().collect();
     for action in actions {
@@ -435,6 +436,8 @@ pub fn run_actions(
             }
             StudioAction::FrameSelected => frame_selected.0 = true,
             StudioAction::Quit => {
+                // Quitting after "Discard" drops the unsaved edits: no recovery file stays.
+                autosave.discard_on_exit = confirmed;
                 exit.write(AppExit::Success);
             }
             StudioAction::Discard(_) => {}

@@ -5,6 +5,7 @@
 //! exits (for automated checks, also under `xvfb-run` with software Vulkan).
 
 mod authoring;
+mod autosave;
 mod box_select;
 mod camera;
 mod compare;
@@ -50,6 +51,16 @@ struct Args {
     /// Select this node when the scene opens (its gizmo and handles are highlighted).
     #[arg(long, value_name = "NODE")]
     select: Option<String>,
+    /// Restore the unsaved work an earlier session left (after a crash or a kill) without
+    /// asking. Without it the Studio asks, except with --screenshot.
+    #[arg(long)]
+    recover: bool,
+    /// Autosave unsaved work to the recovery file at least every this many seconds.
+    #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u64).range(1..=3600))]
+    autosave_seconds: u64,
+    /// And after every this many steps.
+    #[arg(long, default_value_t = 50, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    autosave_steps: u32,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -82,6 +93,18 @@ fn main() -> anyhow::Result<()> {
     if let Some(out) = &args.screenshot {
         screenshot::check_writable(out)?;
     }
+    // A recovery file of this project is what a session that did not close normally left.
+    // A screenshot run has no one to ask, so it offers nothing unless told to recover.
+    let recovery_file = ductile_io::recovery::recovery_path(&project);
+    let found = (args.recover || args.screenshot.is_none())
+        .then(|| ductile_io::recovery::find_recovery(&recovery_file))
+        .flatten();
+    if args.recover && found.is_none() {
+        eprintln!(
+            "warning: --recover: there is no recovery file {}",
+            recovery_file.display()
+        );
+    }
     let title = format!("Ductile Studio — {}", project.display_name());
     let mut app = App::new();
     app.add_plugins(DefaultPlugins.set(WindowPlugin {
@@ -96,6 +119,12 @@ fn main() -> anyhow::Result<()> {
         project,
         warnings: warnings.iter().map(ToString::to_string).collect(),
         select: args.select.clone(),
+        recovery: studio::RecoveryOptions {
+            every: std::time::Duration::from_secs(args.autosave_seconds),
+            every_steps: args.autosave_steps,
+            found,
+            recover_now: args.recover,
+        },
     });
     if let Some(out) = args.screenshot {
         app.add_plugins(screenshot::ScreenshotPlugin {

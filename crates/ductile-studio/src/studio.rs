@@ -27,6 +27,21 @@ pub struct StudioPlugin {
     pub warnings: Vec<String>,
     /// A node to select at start.
     pub select: Option<String>,
+    /// Autosave and the recovery of an earlier session's unsaved work.
+    pub recovery: RecoveryOptions,
+}
+
+/// How the Studio autosaves, and what it found from an earlier session.
+#[derive(Debug, Clone)]
+pub struct RecoveryOptions {
+    /// Write the recovery file at least this often while there are unsaved edits.
+    pub every: std::time::Duration,
+    /// And after this many steps.
+    pub every_steps: u32,
+    /// A recovery file an earlier session left for this project.
+    pub found: Option<ductile_io::recovery::FoundRecovery>,
+    /// Restore it at start without asking (`--recover`).
+    pub recover_now: bool,
 }
 
 /// The open project: where it is saved, its mesh sources (the live document and history are
@@ -55,6 +70,9 @@ pub struct FramePending(pub bool);
 
 impl Plugin for StudioPlugin {
     fn build(&self, app: &mut App) {
+        if self.recovery.recover_now {
+            app.add_systems(Startup, crate::autosave::recover_at_start);
+        }
         let project = self.project.clone();
         let doc =
             SceneDocument::with_history(project.history().clone(), project.document().clone());
@@ -85,10 +103,19 @@ impl Plugin for StudioPlugin {
         .init_resource::<crate::box_select::BoxSelect>()
         .init_resource::<crate::compare::Compare>()
         .init_resource::<crate::files::ExportJob>()
+        .insert_resource(crate::autosave::Autosave::new(
+            self.recovery.every,
+            self.recovery.every_steps,
+            self.recovery.found.clone(),
+        ))
         .add_message::<StudioAction>()
         .add_message::<crate::authoring::AddNode>()
         .add_systems(Startup, setup)
-        .add_systems(EguiPrimaryContextPass, studio_ui)
+        .add_systems(
+            EguiPrimaryContextPass,
+            (studio_ui, crate::autosave::recovery_offer).chain(),
+        )
+        .add_systems(Last, crate::autosave::autosave_at_exit)
         .add_systems(
             Update,
             (
@@ -103,6 +130,7 @@ impl Plugin for StudioPlugin {
                     .chain()
                     .before(DuctileSystems::Input),
                 crate::files::poll_export,
+                crate::autosave::autosave.after(DuctileSystems::Evaluate),
                 load_rest_meshes
                     .before(DuctileSystems::Evaluate)
                     .after(DuctileSystems::Sync),

@@ -352,7 +352,7 @@ fn the_inspector_edits_a_tool_and_refuses_an_out_of_range_value() {
     });
     assert!(last_epsilon.is_none_or(|e| e > 0.0), "{last_epsilon:?}");
     h.get_by_label_contains("refused:");
-    h.get_by_label_contains("must be > 0");
+    h.get_by_label_contains("must be at least 1e-6 (a width in scene units)");
     h.state_mut().commands.clear();
     assert!(h.state().ops().is_empty(), "{:?}", h.state().ops());
 }
