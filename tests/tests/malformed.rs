@@ -87,3 +87,46 @@ fn check_reports_bad_areas_no_layer_uses_yet() {
         "{out}"
     );
 }
+
+#[test]
+fn a_bad_transform_is_reported_once_on_its_node_not_again_through_the_tools_beneath() {
+    // Issue 14: a zero scale on a group was reported on the group, then a second time as a
+    // zero epsilon of the tool beneath it (a value derived in mesh space, never written);
+    // a translation of 1e38 was reported only as a tool's control point out of range.
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = data("tetra.obj");
+    for (transform, expected) in [
+        ("scale: (0.0, 1.0, 1.0)", "a scale component is zero"),
+        (
+            "translation: (1e38, 0.0, 0.0)",
+            "a translation component lies beyond ±1e9",
+        ),
+        (
+            "scale: (1e-20, 1.0, 1.0)",
+            "a scale component is smaller than 1e-9",
+        ),
+    ] {
+        let scene = dir.path().join("bad-group.ron");
+        std::fs::write(
+            &scene,
+            format!(
+                "(version: 2, nodes: [\
+                 (name: \"tetra\", kind: Mesh((source: {:?}, stack: [(tool: \"pull\")]))),\
+                 (name: \"g\", parent: Some(\"tetra\"), transform: ({transform}), kind: Group),\
+                 (name: \"pull\", parent: Some(\"g\"), kind: Tool(Ffsd((points: [\
+                 (position: (0.0, 0.0, 0.0), gamma: 0.5, alpha: 2.0, epsilon: 0.5)])))),\
+                 ])",
+                mesh.to_str().unwrap()
+            ),
+        )
+        .unwrap();
+        let (r, out) = cli(&["check", scene.to_str().unwrap()]);
+        assert_eq!(r, Ok(1), "{out}");
+        assert!(
+            out.contains("node 'g'") && out.contains(expected),
+            "{transform}: {out}"
+        );
+        assert!(out.contains("1 problem\n"), "{transform}: {out}");
+        assert!(!out.contains("tool 'pull'"), "{transform}: {out}");
+    }
+}

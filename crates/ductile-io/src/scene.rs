@@ -350,6 +350,10 @@ fn check_document(path: &Path, mesh_root: &Path, document: &Document) -> Vec<IoE
             source,
         })
         .collect();
+    let bad_transform = document
+        .nodes
+        .iter()
+        .any(|n| !n.transform.is_finite() || n.transform.degeneracy().is_some());
     for node in &document.nodes {
         let NodeKind::Mesh(m) = &node.kind else {
             continue;
@@ -366,7 +370,10 @@ fn check_document(path: &Path, mesh_root: &Path, document: &Document) -> Vec<IoE
                         });
                     }
                 };
-                if let Err(source) = document.evaluate(&node.name, &loaded.rest) {
+                // Through a node whose transform was refused above, the tools' parameters in
+                // mesh space are derived values the user never wrote: evaluating would report
+                // the same bad value a second time, disguised.
+                if !bad_transform && let Err(source) = document.evaluate(&node.name, &loaded.rest) {
                     report(source);
                 }
                 // Every area, used by a layer yet or not: a bad one would fail only when a

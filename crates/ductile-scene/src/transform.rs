@@ -50,16 +50,27 @@ impl Transform {
         self.translation.is_finite() && self.rotation.is_finite() && self.scale.is_finite()
     }
 
-    /// Why a finite transform cannot be inverted, if it cannot: a zero scale component or a
-    /// zero rotation quaternion (which glam would otherwise treat as a rotation by NaN, and
-    /// a renormalising reader as the identity). Tools are carried into mesh space through
-    /// the inverse of the mesh's world transform, so both are refused everywhere.
+    /// Why a finite transform cannot be inverted or carried, if it cannot: a zero scale
+    /// component or a zero rotation quaternion (which glam would otherwise treat as a
+    /// rotation by NaN, and a renormalising reader as the identity); or a translation or
+    /// scale beyond ±10⁹, or a scale below 10⁻⁹ in magnitude, whose products with the tools'
+    /// parameters leave the range Ductile computes in
+    /// ([`ductile_core::error::MAX_MAGNITUDE`]). Tools are carried into mesh space through
+    /// the inverse of the mesh's world transform, so all are refused everywhere, on the node
+    /// that holds them rather than as derived values of the tools beneath it.
     #[must_use]
     pub fn degeneracy(&self) -> Option<&'static str> {
+        use ductile_core::error::MAX_MAGNITUDE;
         if self.scale.x == 0.0 || self.scale.y == 0.0 || self.scale.z == 0.0 {
             Some("a scale component is zero")
         } else if self.rotation.length_squared() == 0.0 {
             Some("the rotation quaternion is zero")
+        } else if self.translation.abs().max_element() > MAX_MAGNITUDE {
+            Some("a translation component lies beyond ±1e9")
+        } else if self.scale.abs().max_element() > MAX_MAGNITUDE {
+            Some("a scale component lies beyond ±1e9")
+        } else if self.scale.abs().min_element() < 1.0 / MAX_MAGNITUDE {
+            Some("a scale component is smaller than 1e-9 in magnitude")
         } else {
             None
         }
