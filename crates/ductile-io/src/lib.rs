@@ -92,11 +92,27 @@ pub fn read_file(path: &Path) -> std::io::Result<Vec<u8>> {
     Ok(bytes)
 }
 
-/// [`read_file`] as UTF-8 text (scene and history files).
+/// The most bytes of one scene or history file: 512 MiB. Parsing RON text takes several
+/// times its size in memory; real files are far smaller (the 45-macro identikit scene is
+/// 46 KB, the character artist's six-step history with two sketch tools 15 KB).
+pub const MAX_TEXT_BYTES: u64 = 512 << 20;
+
+/// [`read_file`] as UTF-8 text (scene and history files), at most [`MAX_TEXT_BYTES`].
 ///
 /// # Errors
-/// As [`read_file`], and [`std::io::ErrorKind::InvalidData`] when the file is not UTF-8.
+/// As [`read_file`], [`std::io::ErrorKind::InvalidInput`] when the file is larger than
+/// [`MAX_TEXT_BYTES`], and [`std::io::ErrorKind::InvalidData`] when it is not UTF-8.
 pub fn read_text_file(path: &Path) -> std::io::Result<String> {
+    let size = std::fs::metadata(path)?.len();
+    if size > MAX_TEXT_BYTES {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!(
+                "the file holds {size} bytes, more than the limit of {MAX_TEXT_BYTES} for a \
+                 scene or history"
+            ),
+        ));
+    }
     String::from_utf8(read_file(path)?).map_err(|e| {
         std::io::Error::new(
             std::io::ErrorKind::InvalidData,

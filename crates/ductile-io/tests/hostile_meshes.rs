@@ -329,3 +329,28 @@ fn scenes_histories_and_meshes_naming_special_files_are_refused_not_read() {
         "{err}"
     );
 }
+
+#[test]
+fn a_scene_or_history_larger_than_the_text_limit_is_refused_before_it_is_read() {
+    // A sparse file: 513 MiB long, no disk used. Read and parsed, it would take gigabytes.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("huge.ron");
+    let f = std::fs::File::create(&path).unwrap();
+    f.set_len(ductile_io::MAX_TEXT_BYTES + (1 << 20)).unwrap();
+    drop(f);
+    for err in [
+        ductile_io::read_scene(&path)
+            .map(|_| ())
+            .unwrap_err()
+            .to_string(),
+        ductile_io::read_history(&path)
+            .map(|_| ())
+            .unwrap_err()
+            .to_string(),
+    ] {
+        assert!(
+            err.contains("huge.ron") && err.contains("more than the limit of 536870912"),
+            "{err}"
+        );
+    }
+}
