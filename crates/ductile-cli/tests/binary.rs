@@ -2,16 +2,11 @@
 
 #![allow(clippy::unwrap_used)] // Tests may unwrap (house rules).
 
-use std::path::Path;
+mod common;
+
 use std::process::Command;
 
-fn data(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../tests/data")
-        .join(name)
-        .display()
-        .to_string()
-}
+use common::data;
 
 fn ductile(args: &[&str]) -> (i32, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_ductile"))

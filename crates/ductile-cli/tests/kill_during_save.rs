@@ -4,17 +4,13 @@
 
 #![allow(clippy::unwrap_used)] // Tests may unwrap (house rules).
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
 
-fn data(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../tests/data")
-        .join(name)
-        .display()
-        .to_string()
-}
+use common::data;
 
 fn apply(scene: &str, output: &Path) -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_ductile"));

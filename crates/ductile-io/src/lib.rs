@@ -68,6 +68,34 @@ pub const MAX_FILE_BYTES: u64 = 4 << 30;
 /// The operating system's error, or [`std::io::ErrorKind::InvalidInput`] naming what the
 /// path is when it is not a regular file or is too large.
 pub fn read_file(path: &Path) -> std::io::Result<Vec<u8>> {
+    read_limited(path, MAX_FILE_BYTES)
+}
+
+/// The most bytes of one scene or history file: 512 MiB. Parsing RON text takes several
+/// times its size in memory; real files are far smaller (the 45-macro identikit scene is
+/// 46 KB, the character artist's six-step history with two sketch tools 15 KB).
+pub const MAX_TEXT_BYTES: u64 = 512 << 20;
+
+/// [`read_file`] as UTF-8 text (scene and history files), at most [`MAX_TEXT_BYTES`].
+///
+/// # Errors
+/// As [`read_file`] (with the smaller limit), and [`std::io::ErrorKind::InvalidData`] when
+/// the file is not UTF-8.
+pub fn read_text_file(path: &Path) -> std::io::Result<String> {
+    String::from_utf8(read_limited(path, MAX_TEXT_BYTES)?).map_err(|e| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "the file is not UTF-8 text (byte {})",
+                e.utf8_error().valid_up_to()
+            ),
+        )
+    })
+}
+
+/// [`read_file`] with the size limit `limit`, checked before reading (from the file's
+/// metadata) and while reading (the file may grow).
+fn read_limited(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
     use std::io::Read as _;
     let kind = std::fs::metadata(path)?.file_type();
     if !kind.is_file() {
@@ -79,49 +107,21 @@ pub fn read_file(path: &Path) -> std::io::Result<Vec<u8>> {
     if !meta.file_type().is_file() {
         return Err(not_regular(meta.file_type()));
     }
-    let mut bytes = Vec::new();
-    (&mut file)
-        .take(MAX_FILE_BYTES + 1)
-        .read_to_end(&mut bytes)?;
-    if bytes.len() as u64 > MAX_FILE_BYTES {
-        return Err(std::io::Error::new(
+    let too_large = |size: u64| {
+        std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
-            format!("the file is larger than the limit of {MAX_FILE_BYTES} bytes"),
-        ));
+            format!("the file holds {size} bytes, more than the limit of {limit}"),
+        )
+    };
+    if meta.len() > limit {
+        return Err(too_large(meta.len()));
+    }
+    let mut bytes = Vec::new();
+    (&mut file).take(limit + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(too_large(bytes.len() as u64));
     }
     Ok(bytes)
-}
-
-/// The most bytes of one scene or history file: 512 MiB. Parsing RON text takes several
-/// times its size in memory; real files are far smaller (the 45-macro identikit scene is
-/// 46 KB, the character artist's six-step history with two sketch tools 15 KB).
-pub const MAX_TEXT_BYTES: u64 = 512 << 20;
-
-/// [`read_file`] as UTF-8 text (scene and history files), at most [`MAX_TEXT_BYTES`].
-///
-/// # Errors
-/// As [`read_file`], [`std::io::ErrorKind::InvalidInput`] when the file is larger than
-/// [`MAX_TEXT_BYTES`], and [`std::io::ErrorKind::InvalidData`] when it is not UTF-8.
-pub fn read_text_file(path: &Path) -> std::io::Result<String> {
-    let size = std::fs::metadata(path)?.len();
-    if size > MAX_TEXT_BYTES {
-        return Err(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            format!(
-                "the file holds {size} bytes, more than the limit of {MAX_TEXT_BYTES} for a \
-                 scene or history"
-            ),
-        ));
-    }
-    String::from_utf8(read_file(path)?).map_err(|e| {
-        std::io::Error::new(
-            std::io::ErrorKind::InvalidData,
-            format!(
-                "the file is not UTF-8 text (byte {})",
-                e.utf8_error().valid_up_to()
-            ),
-        )
-    })
 }
 
 fn not_regular(kind: std::fs::FileType) -> std::io::Error {

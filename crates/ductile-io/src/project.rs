@@ -665,7 +665,7 @@ fn sibling_history(
 
 /// The loaded history at its saved cursor, with the document there. Every step is replayed
 /// and checked (the redo tail too), then the tail is undone.
-fn restore(loaded: LoadedHistory) -> Result<(History, Document)> {
+pub(crate) fn restore(loaded: LoadedHistory) -> Result<(History, Document)> {
     let LoadedHistory {
         path,
         history,

@@ -18,8 +18,8 @@ use std::time::SystemTime;
 use ductile_history::history::History;
 use ductile_scene::document::Document;
 
-use crate::history_file::{SaveBase, history_to_string, parse_history};
-use crate::project::Project;
+use crate::history_file::{SaveBase, read_history, save_history};
+use crate::project::{Project, restore};
 use crate::{IoError, Result};
 
 /// The environment variable that overrides the recovery folder (tests use it).
@@ -83,11 +83,7 @@ pub fn write_recovery(path: &Path, history: &History) -> Result<()> {
             source,
         })?;
     }
-    let text = history_to_string(history, SaveBase::Inline, path).map_err(|e| IoError::Write {
-        path: path.to_owned(),
-        source: std::io::Error::other(e),
-    })?;
-    crate::write_atomic(path, text.as_bytes())
+    save_history(path, history, SaveBase::Inline)
 }
 
 /// A recovery file left by a session that did not close normally.
@@ -105,8 +101,7 @@ pub struct FoundRecovery {
 #[must_use]
 pub fn find_recovery(path: &Path) -> Option<FoundRecovery> {
     let written = std::fs::metadata(path).ok()?.modified().ok()?;
-    let text = crate::read_text_file(path).ok()?;
-    let loaded = parse_history(&text, path).ok()?;
+    let loaded = read_history(path).ok()?;
     Some(FoundRecovery {
         path: path.to_owned(),
         written,
@@ -120,20 +115,7 @@ pub fn find_recovery(path: &Path) -> Option<FoundRecovery> {
 /// # Errors
 /// The file cannot be read, is not a history, or a step does not replay.
 pub fn read_recovery(path: &Path) -> Result<(History, Document)> {
-    let text = crate::read_text_file(path).map_err(|source| IoError::Read {
-        path: path.to_owned(),
-        source,
-    })?;
-    let loaded = parse_history(&text, path)?;
-    let cursor = loaded.cursor;
-    let err = |source| IoError::History {
-        path: path.to_owned(),
-        source,
-    };
-    let mut history = loaded.history;
-    let mut document = history.document_at(history.len()).map_err(err)?;
-    history.jump(&mut document, cursor).map_err(err)?;
-    Ok((history, document))
+    restore(read_history(path)?)
 }
 
 /// Removes the recovery file `path` (after a save or a normal exit); nothing to do when
