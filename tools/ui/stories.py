@@ -22,8 +22,8 @@ pixel for pixel) before redoing them and going on:
    made from it, written to OUT_DIR/technical-batch/.
 5. identikit (the head): a free point, faces A and B saved as variants, the morph typed to 0
    and 1 (A and B pixel for pixel) and dragged between them.
-6. animate (a scratch copy of MakeHuman's body): a bend keyed straight at frame 0 and bent
-   at 24, a neck twist keyed, frame 12 in between, play and pause, Ctrl+S, File > Export
+6. animate (a scratch copy of MakeHuman's body): a bend keyed straight at frame 0 (the edit
+   of the animated target offered to be keyed, and keyed) and bent at 24, a neck twist keyed, frame 12 in between, play and pause, Ctrl+S, File > Export
    animation (copied to OUT_DIR/animate-animation.glb), whose middle frame keeps the limb
    length (`limb.py` reads the file).
 7. review: the history the animate story saved, opened, stepped through and played.
@@ -69,6 +69,10 @@ RECOVER = (504, 450)
 FILE_MENU = (19, 11)
 # Rows of the File menu.
 FILE = {"Export animation": (73, 171)}
+# The offer to key an edit of animated fields (over the bottom of the view) and its Key
+# button when it names the bend's target.
+OFFER_BAR = (365, 670, 835, 705)
+KEY_OFFER_BEND = (704, 689)
 # The timeline under the view: its first-frame button and the frame ruler (frames 0..48).
 TIMELINE_FIRST = (18, 727)
 
@@ -389,6 +393,12 @@ def bend_arm(studio):
     return studio.shot("2-arm-bent", settle=4.0)
 
 
+def unkeyed(shot):
+    """Pixels of the offer to key an edit (its orange text over the bottom of the view)."""
+    return sum(1 for _, _, (r, g, b) in pixels(shot, OFFER_BAR)
+               if abs(r - 240) < 30 and abs(g - 150) < 30 and b < 100)
+
+
 def forearm_up(shot):
     """Surface pixels where the bent forearm goes (few when the arm hangs straight)."""
     return sum(1 for _, _, c in pixels(shot, (745, 245, 800, 275)) if is_mesh(c))
@@ -408,12 +418,18 @@ def story_animate(studio):
     x = ruler(24)[0]
     diamond = [c for _, _, c in pixels(keyed, (x - 3, 763, x + 3, 769)) if min(c) > 180]
     expect(len(diamond) > 10, "no key diamond at frame 24 on the timeline")
-    # Frame 0: the straight target (no bend), keyed there by editing it (an animated field).
+    # Frame 0: the straight target (no bend). The target is animated and has no key at 0:
+    # the edit is shown and offered to be keyed (auto-key is off), and Key keys it.
     studio.click(*TIMELINE_FIRST)
     studio.click(925, 290)  # Inspector ▸ Straight target (no bend)
-    straight = studio.shot("4-straight-at-0", settle=3.0)
-    expect(forearm_up(straight) < 100, "at frame 0 the arm is not straight after "
-                                       "'Straight target'")
+    offered = studio.shot("4-straight-offered", settle=3.0)
+    expect(forearm_up(offered) < 100, "at frame 0 the arm is not straight after "
+                                      "'Straight target'")
+    expect(unkeyed(offered) > 100, "no offer to key the edit of the animated target")
+    studio.click(*KEY_OFFER_BEND)
+    straight = studio.shot("4-straight-keyed-at-0", settle=2.0)
+    expect(unkeyed(straight) == 0, "the offer is still shown after Key")
+    expect(forearm_up(straight) < 100, "keying the straight target moved the arm")
     # The neck: a twist drawn at frame 24 (from the chest up, so the head turns), keyed.
     studio.click(*ruler(24))
     studio.click(*ADD_MENU)
@@ -431,6 +447,9 @@ def story_animate(studio):
     studio.key("0")
     studio.key("Return")
     studio.key("Escape")  # nothing selected: no gizmos over the figure
+    expect(unkeyed(studio.shot("6-angle-offered", settle=2.0)) > 100,
+           "no offer to key the twist's angle at frame 0")
+    studio.key("k")  # K keys the offered edit
     rest = studio.shot("6-rest-at-0", settle=3.0)
     expect(differing(start, rest, head) < 200, "at frame 0 the head is not back at rest")
     expect(forearm_up(rest) < 100, "at frame 0 the arm is not straight")

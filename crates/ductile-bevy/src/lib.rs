@@ -50,7 +50,9 @@ pub mod prelude {
     pub use crate::DuctilePlugin;
     pub use crate::DuctileSystems;
     pub use crate::components::{HandleMarker, MeshNodeMarker, SceneNode};
-    pub use crate::document::{DocumentChange, DocumentCommand, EditStatus, SceneDocument};
+    pub use crate::document::{
+        DocumentChange, DocumentCommand, EditStatus, PendingEdit, SceneDocument,
+    };
     pub use crate::drag::AxisConstraint;
     pub use crate::error::DuctileBevyError;
     pub use crate::evaluate::{

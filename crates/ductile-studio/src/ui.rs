@@ -36,6 +36,7 @@ pub struct PanelState {
     status: StatusBar,
     add_popup: AddPopup,
     timeline: TimelinePanel,
+    key_offer: crate::panels::key_offer::KeyOffer,
     variants: VariantsPanel,
     frame_ms: Option<f64>,
 }
@@ -236,6 +237,17 @@ pub fn studio_ui(
         },
     );
 
+    // The free rectangle between the panels.
+    let screen = ctx.viewport_rect();
+    let min = egui::pos2(left.response.rect.right(), top.response.rect.bottom());
+    let max = egui::pos2(
+        right.response.rect.left(),
+        bottom.response.rect.top().min(timeline.response.rect.top()),
+    );
+    let free = egui::Rect::from_min_max(min, max).intersect(screen);
+    // The offer to key an edit of animated fields, over the bottom of the view.
+    panels.key_offer.show(&ctx, free, &mut cx);
+
     if let Some(a) = dialogs.show(&ctx) {
         actions.write(a);
     }
@@ -309,14 +321,6 @@ pub fn studio_ui(
         });
     }
 
-    // The free rectangle between the panels.
-    let screen = ctx.viewport_rect();
-    let min = egui::pos2(left.response.rect.right(), top.response.rect.bottom());
-    let max = egui::pos2(
-        right.response.rect.left(),
-        bottom.response.rect.top().min(timeline.response.rect.top()),
-    );
-    let free = egui::Rect::from_min_max(min, max).intersect(screen);
     let wanted = (free.width() > 8.0 && free.height() > 8.0).then(|| {
         (
             Vec2::new(free.min.x, free.min.y),

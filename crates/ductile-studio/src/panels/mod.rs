@@ -7,6 +7,7 @@ pub mod curve_editor;
 pub mod history;
 pub mod influence;
 pub mod inspector;
+pub mod key_offer;
 pub mod macros;
 pub mod menu_bar;
 pub mod outliner;
@@ -36,7 +37,8 @@ pub enum PanelRequest {
 }
 
 /// Whether a channel is animated, and keyed at the current time (the colours of keyed
-/// fields follow Blender: yellow on a key, green between keys).
+/// fields follow Blender: yellow on a key, green between keys, orange when changed and not
+/// keyed).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum KeyState {
     /// The channel has no track.
@@ -45,6 +47,8 @@ pub enum KeyState {
     Animated,
     /// The channel has a key at the current time.
     Keyed,
+    /// The channel is animated and changed by an edit waiting to be keyed.
+    Changed,
 }
 
 impl KeyState {
@@ -53,6 +57,12 @@ impl KeyState {
     pub fn of(doc: &SceneDocument, node: &str, path: &str) -> Self {
         let fps = doc.document().animation.fps;
         let frame = doc.frame();
+        if doc
+            .pending()
+            .is_some_and(|p| p.channels().iter().any(|(n, c)| n == node && c == path))
+        {
+            return Self::Changed;
+        }
         match doc.document().animation.track(node, path) {
             None => Self::Static,
             Some(keys) if keys.iter().any(|k| (k.time * fps).round() == frame) => Self::Keyed,
@@ -67,6 +77,7 @@ impl KeyState {
             Self::Static => None,
             Self::Animated => Some(egui::Color32::from_rgb(120, 200, 110)),
             Self::Keyed => Some(egui::Color32::from_rgb(235, 200, 70)),
+            Self::Changed => Some(key_offer::UNKEYED),
         }
     }
 }

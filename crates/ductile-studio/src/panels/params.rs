@@ -342,7 +342,7 @@ pub fn parameter_list(
                     for (path, value) in items {
                         let m = meta(path);
                         // Animated fields are coloured as in Blender (yellow on a key,
-                        // green between keys); editing one keys it at the current frame.
+                        // green between keys, orange when changed and not keyed).
                         let state = super::KeyState::of(doc, node, path);
                         let mut label = egui::RichText::new(leaf(path));
                         if let Some(c) = state.color() {
@@ -350,8 +350,19 @@ pub fn parameter_list(
                         }
                         let r = ui.label(label).on_hover_text(m.hint);
                         let mut over = r.hovered();
-                        if state != super::KeyState::Static {
-                            r.on_hover_text("animated: an edit sets a key at this frame");
+                        match state {
+                            super::KeyState::Static => {}
+                            super::KeyState::Changed => {
+                                r.on_hover_text("animated, changed and not keyed: K keys it");
+                            }
+                            _ if doc.auto_key() => {
+                                r.on_hover_text("animated: an edit sets a key at this frame");
+                            }
+                            _ => {
+                                r.on_hover_text(
+                                    "animated: an edit is offered to be keyed (K keys it)",
+                                );
+                            }
                         }
                         let inner = ui.vertical(|ui| {
                             let wid = egui::Id::new((id, path));

@@ -106,19 +106,7 @@ impl<P> State<P> {
     /// Applies the emitted commands to the document, as the Studio does after its UI pass.
     fn apply_commands(&mut self) {
         for c in std::mem::take(&mut self.commands) {
-            match c {
-                DocumentCommand::Apply { op, label, gesture } => {
-                    self.doc.apply(*op, label, gesture).unwrap();
-                }
-                DocumentCommand::Undo => {
-                    self.doc.undo().unwrap();
-                }
-                DocumentCommand::Redo => {
-                    self.doc.redo().unwrap();
-                }
-                DocumentCommand::Jump(n) => self.doc.jump(n).unwrap(),
-                DocumentCommand::SetTime(t) => self.doc.set_time(t),
-            }
+            self.doc.run(c).unwrap();
         }
     }
 }
@@ -447,11 +435,24 @@ fn the_timeline_keys_the_selection_and_a_drag_moves_keys_in_one_step() {
     assert_eq!(keys.len(), channels, "one key per channel");
     h.state_mut().apply_commands();
     assert_eq!(h.state().doc.history().len(), 1);
-    // Go to frame 12 and edit the radius in the pose: it is keyed there (auto-key).
+    // Go to frame 12 and edit the radius in the pose: auto-key is off, so the edit is
+    // offered to be keyed, not recorded; K keys it there, as one step.
     h.state_mut().doc.set_time(0.5);
     let posed = h.state().doc.shown().clone();
     let op = Operation::set_volume(&posed, "v", Shape::Sphere { radius: 2.0 }).unwrap();
     h.state_mut().doc.apply(op, "", None).unwrap();
+    assert!(h.state().doc.pending().is_some(), "the edit is offered");
+    assert_eq!(h.state().doc.history().len(), 1, "and not recorded yet");
+    h.run();
+    h.key_press(egui::Key::K);
+    h.run();
+    assert!(
+        matches!(h.state().commands[..], [DocumentCommand::KeyPending]),
+        "K keys the offered edit: {:?}",
+        h.state().commands
+    );
+    h.state_mut().apply_commands();
+    assert_eq!(h.state().doc.history().len(), 2);
     let doc = h.state().doc.document().clone();
     assert_eq!(
         doc.node("v").unwrap().kind,
@@ -666,5 +667,72 @@ fn k_over_a_field_keys_that_channel_alone() {
     assert!(
         matches!(&ops[..], [Operation::SetKey { node, param, .. }] if node == "v" && *param == path),
         "{ops:?}"
+    );
+}
+
+#[test]
+fn the_key_offer_keys_or_reverts_an_edit_of_an_animated_field() {
+    // The sphere's radius keyed 1 at frame 0 and 3 at frame 24; at frame 12 the radius
+    // typed as 5 is held and offered.
+    let mut doc = document();
+    let path = doc.channels("v").unwrap().last().unwrap().0.clone();
+    doc.animation.tracks.entry("v".into()).or_default().insert(
+        path.clone(),
+        vec![
+            ductile_scene::prelude::Key::new(0.0, Value::Scalar(1.0)),
+            ductile_scene::prelude::Key::new(1.0, Value::Scalar(3.0)),
+        ],
+    );
+    let mut state = State::new(super::key_offer::KeyOffer);
+    state.doc = SceneDocument::new(doc);
+    state.doc.set_time(0.5);
+    let edit = |state: &mut State<super::key_offer::KeyOffer>| {
+        let posed = state.doc.shown().clone();
+        let op = Operation::set_volume(&posed, "v", Shape::Sphere { radius: 5.0 }).unwrap();
+        state.doc.apply(op, "radius", None).unwrap();
+    };
+    edit(&mut state);
+    let mut h = harness(state, |p, ui, cx| {
+        p.show(&ui.ctx().clone(), ui.max_rect(), cx);
+    });
+    h.run();
+    let text = format!("Not keyed: {path} of 'v' at frame 12");
+    h.get_by_label(&text);
+    assert_eq!(
+        super::KeyState::of(&h.state().doc, "v", &path),
+        super::KeyState::Changed,
+        "the field is marked as changed, not keyed"
+    );
+    // Revert drops it: nothing recorded, the pose as before.
+    h.get_by_label("Revert").click();
+    h.run();
+    assert!(matches!(
+        h.state().commands[..],
+        [DocumentCommand::RevertPending]
+    ));
+    h.state_mut().apply_commands();
+    assert!(h.state().doc.pending().is_none());
+    assert!(h.state().doc.history().is_empty());
+    h.run();
+    assert!(h.query_by_label(&text).is_none(), "the offer is gone");
+    // Again, and Key: one step, a key at frame 12 with the edited value.
+    edit(h.state_mut());
+    h.run();
+    h.get_by_label("Key (K)").click();
+    h.run();
+    assert!(matches!(
+        h.state().commands[..],
+        [DocumentCommand::KeyPending]
+    ));
+    h.state_mut().apply_commands();
+    let d = h.state().doc.document();
+    assert_eq!(h.state().doc.history().len(), 1);
+    let track = d.animation.track("v", &path).unwrap();
+    assert_eq!(track.len(), 3, "{track:?}");
+    assert_eq!(track[1].time, 0.5);
+    assert_eq!(track[1].value, Value::Scalar(5.0));
+    assert_eq!(
+        super::KeyState::of(&h.state().doc, "v", &path),
+        super::KeyState::Keyed
     );
 }

@@ -2,9 +2,11 @@
 //! the previous or next key, and the keys of the selected node as diamonds — a summary row
 //! and one row per animated channel — that can be selected (click, Shift-click, box), moved
 //! by dragging (one undo step per drag), given an interpolation or deleted from their
-//! context menu. **K** keys what the inspector shows: the field under the pointer (an
-//! inspector field or an identikit slider), else every channel of the selected node, or with
-//! nothing selected every macro tool's value (the identikit face).
+//! context menu. **K** keys what the inspector shows: an edit waiting to be keyed (see
+//! [`super::key_offer`]), else the field under the pointer (an inspector field or an
+//! identikit slider), else every channel of the selected node, or with nothing selected
+//! every macro tool's value (the identikit face). **Auto-key** keys animated fields as they
+//! are edited.
 //!
 //! Times are seconds in the document and whole frames here (`frame = time · fps`).
 
@@ -319,6 +321,17 @@ impl TimelinePanel {
                 self.delete_selected(cx);
             }
             ui.checkbox(&mut self.expanded, "Channels");
+            let mut auto = cx.doc.auto_key();
+            if ui
+                .toggle_value(&mut auto, "Auto-key")
+                .on_hover_text(
+                    "Key animated fields as you edit them (off: an edit at a frame without \
+                     a key is offered to be keyed)",
+                )
+                .changed()
+            {
+                cx.commands.push(DocumentCommand::SetAutoKey(auto));
+            }
         });
         // Shortcuts over the whole window, unless a text field is being typed in. K over a
         // field (inspector, identikit slider) keys that channel alone.
@@ -326,6 +339,10 @@ impl TimelinePanel {
         if !ui.ctx().egui_wants_keyboard_input() {
             if ui.input(|i| i.key_pressed(egui::Key::K) && i.modifiers.is_none()) {
                 match hovered {
+                    // An edit waiting to be keyed is what K keys first.
+                    _ if cx.doc.pending().is_some() => {
+                        cx.commands.push(DocumentCommand::KeyPending);
+                    }
                     Some((n, path)) => match Operation::key_current(doc, &n, &path, time) {
                         Ok(op) => cx.apply(op),
                         Err(e) => cx.requests.push(PanelRequest::Problem(e.to_string())),
