@@ -22,10 +22,12 @@ pixel for pixel) before redoing them and going on:
    made from it, written to OUT_DIR/technical-batch/.
 5. identikit (the head): a free point, faces A and B saved as variants, the morph typed to 0
    and 1 (A and B pixel for pixel) and dragged between them.
-6. animate (a scratch copy of MakeHuman's body): a bend keyed straight at frame 0 (the edit
-   of the animated target offered to be keyed, and keyed) and bent at 24, a neck twist keyed, frame 12 in between, play and pause, Ctrl+S, File > Export
-   animation (copied to OUT_DIR/animate-animation.glb), whose middle frame keeps the limb
-   length (`limb.py` reads the file).
+6. animate (from the README's start: File > New, File > Import mesh... of MakeHuman's base
+   mesh, its body chosen in "Import which part?"): a bend keyed straight at frame 0 (the edit
+   of the animated target offered to be keyed, and keyed) and bent at 24, a neck twist
+   keyed, frame 12 in between, play and pause, Ctrl+S (Save As: the path typed in the
+   dialog), File > Export animation (copied to OUT_DIR/animate-animation.glb), whose middle
+   frame keeps the limb length (`limb.py` reads the file).
 7. review: the history the animate story saved, opened, stepped through and played.
 8. crash: an edit autosaved, the Studio killed, the work recovered at the next start (and
    headless with `--recover --screenshot`).
@@ -68,7 +70,11 @@ OFFER = (440, 330, 840, 470)
 RECOVER = (504, 450)
 FILE_MENU = (19, 11)
 # Rows of the File menu.
-FILE = {"Export animation": (73, 171)}
+FILE = {"New": (30, 36), "Import mesh": (60, 129), "Export animation": (73, 171)}
+# The question "Import which part?" for MakeHuman's file: its second row (the body, the
+# largest part) and its Import button.
+IMPORT_PART_BODY = (543, 336)
+IMPORT_PART_OK = (500, 538)
 # The offer to key an edit of animated fields (over the bottom of the view) and its Key
 # button when it names the bend's target.
 OFFER_BAR = (365, 670, 835, 705)
@@ -404,11 +410,46 @@ def forearm_up(shot):
     return sum(1 for _, _, c in pixels(shot, (745, 245, 800, 275)) if is_mesh(c))
 
 
+def type_path(studio, path, field="path"):
+    """Types `path` into the open file dialog and submits it: into its path field ("/"
+    opens it, holding the folder shown), or into the save dialog's file name field (which
+    has the keyboard when it opens); the field is emptied first."""
+    if field == "path":
+        studio.key("slash")
+        time.sleep(0.5)
+    studio.key("End")
+    studio.xdo("key", "--delay", "5", "--repeat", "200", "BackSpace")
+    studio.xdo("type", "--delay", "20", path)
+    # The last characters must reach the field before Enter does (egui may see both in one
+    # frame and submit first).
+    time.sleep(1.0)
+    studio.key("Return")
+
+
 def story_animate(studio):
-    """The character artist: a sketch bend on the arm keyed straight at frame 0 and bent at
-    24, a twist of the neck keyed 0° at frame 0 and drawn at 24, scrub, play, save, and
-    File ▸ Export animation."""
-    start = studio.shot("1-start", settle=15.0)
+    """The character artist, from the README's start: File ▸ New, File ▸ Import mesh… of
+    MakeHuman's base mesh, its body part chosen; a sketch bend on the arm keyed straight at
+    frame 0 and bent at 24, a twist of the neck keyed 0° at frame 0 and drawn at 24, scrub,
+    play, Ctrl+S (Save As, the first time), and File ▸ Export animation."""
+    studio.shot("1-start", settle=15.0)
+    studio.click(*FILE_MENU)
+    time.sleep(1.0)
+    studio.click(*FILE["New"])
+    studio.shot("1-new", settle=2.0)
+    studio.click(*FILE_MENU)
+    time.sleep(1.0)
+    studio.click(*FILE["Import mesh"])
+    dialog = studio.shot("1-import-dialog", settle=2.0)
+    type_path(studio, os.path.join(ROOT, "assets", "meshes", "makehuman-base.obj"))
+    parts = studio.shot("1-import-which-part", settle=3.0)
+    # The parts, the largest first under "Whole file": the body is the second row.
+    expect(differing(parts, dialog, (470, 240, 810, 560)) > 1000,
+           "importing MakeHuman's file did not ask which part to import")
+    studio.click(*IMPORT_PART_BODY)
+    studio.click(*IMPORT_PART_OK)
+    start = studio.shot("1-body-imported", settle=8.0)
+    expect(sum(1 for _, _, c in pixels(start) if is_mesh(c)) > 20000,
+           "no body in the view after the import")
     bent = bend_arm(studio)
     expect(forearm_up(bent) > 300, "the target stroke did not bend the forearm")
     # Frame 24: K keys the bend tool (selected after the sketch) as it is.
@@ -474,9 +515,18 @@ def story_animate(studio):
     p1 = studio.shot("10-paused", settle=1.0)
     p2 = studio.shot("10-paused-later", settle=1.0)
     expect(differing(p1, p2) == 0, "the figure still moves after pausing")
-    # Save, then File ▸ Export animation… (Enter takes the suggested animation.glb).
+    # Save: the new scene has no file yet, so Ctrl+S asks where (Save As); then File ▸
+    # Export animation… (Enter takes the suggested animation.glb).
     studio.key("ctrl+s")
+    studio.shot("9-save-as", settle=2.0)
+    type_path(studio, studio.project, field="file name")
+    studio.shot("9-saved", settle=2.0)
     scene = studio.project
+    for _ in range(20):
+        if os.path.exists(scene):
+            break
+        time.sleep(0.5)
+    expect(os.path.exists(scene), f"Ctrl+S and the Save As dialog wrote no {scene}")
     with open(scene) as f:
         expect("mode.target" in f.read(), "the saved scene has no track of the bend's target")
     studio.click(*FILE_MENU)
@@ -737,22 +787,25 @@ def story_review(studio):
     studio.click(*ruler(24))
     end = studio.shot("2-last-step-at-24", settle=3.0)
     expect(forearm_up(end) > 300, "the opened history does not end with the bent arm")
-    studio.click(*history_button("first", 6))
+    studio.click(*history_button("first", 7))
     base = studio.shot("3-base", settle=3.0)
-    expect(forearm_up(base) < 100 and differing(base, end) > 300,
-           "back at the history's base, the arm is still bent")
+    expect(sum(1 for _, _, c in pixels(base) if is_mesh(c)) < 100,
+           "the history's base (a new, empty scene) shows a mesh")
     seen = [base]
-    for step in range(1, 7):
+    for step in range(1, 8):
         studio.click(*history_button("next", step - 1))
         seen.append(studio.shot(f"4-step-{step}", settle=2.0))
-    expect(forearm_up(seen[1]) > 300, "the first step (the sketch bend) does not bend the arm")
+    expect(sum(1 for _, _, c in pixels(seen[1]) if is_mesh(c)) > 20000
+           and forearm_up(seen[1]) < 100, "the first step (the import) shows no straight body")
+    expect(forearm_up(seen[2]) > 300, "the second step (the sketch bend) does not bend the "
+                                      "arm")
     head = (560, 60, 660, 150)
-    expect(differing(seen[3], seen[4], head) > 300, "the fourth step (the neck twist) does "
+    expect(differing(seen[4], seen[5], head) > 300, "the fifth step (the neck twist) does "
                                                     "not turn the head")
     n = differing(seen[-1], end)
     expect(n == 0, f"the last step differs from the opened history's end in {n} pixels")
     # Play from the base: at two steps a second the whole history replays.
-    studio.click(*history_button("first", 6))
+    studio.click(*history_button("first", 7))
     time.sleep(1.0)
     studio.click(*history_button("play", 0))
     time.sleep(5.0)
@@ -763,12 +816,15 @@ def story_review(studio):
 
 def history_button(name, cursor):
     """Where the history panel's button `name` is when the animation story's history is at
-    step `cursor`: the outliner and the stack above it grow with the sketch tools (one node
-    and one layer at steps 1-3, two of each from step 4)."""
-    y = 206 if cursor == 0 else 268 if cursor < 4 else 312
+    step `cursor`: the outliner and the stack above it grow with the imported body (step 1)
+    and the sketch tools (one node and one layer at steps 2-4, two of each from step 5)."""
+    y = 185 if cursor == 0 else 206 if cursor == 1 else 268 if cursor < 5 else 312
     return ({"first": 17, "play": 74, "next": 103}[name], y)
 
 
+# A story that starts from the README's start and saves a new scene (Save As) in the scratch
+# folder.
+SAVE_AS = "save-as"
 # name, Studio arguments, story, scene copied into a scratch project (the story may save it).
 STORIES = [
     ("head", [], story_head, None),
@@ -776,7 +832,7 @@ STORIES = [
     ("sketch", ["--scene", "scenes/makehuman-body.ron"], story_sketch, None),
     ("technical", [], story_technical, "scenes/spot.ron"),
     ("identikit", [], story_identikit, None),
-    ("animate", [], story_animate, "scenes/makehuman-body.ron"),
+    ("animate", [], story_animate, SAVE_AS),
     ("review", [], story_review, "animate"),
     ("crash", ["--autosave-seconds", "1"], story_crash, None),
 ]
@@ -811,12 +867,16 @@ def main():
             project = None
             if copy in saved:  # the history another story saved
                 project = history_path(saved[copy])
+            elif copy == SAVE_AS:  # where the story saves its new scene
+                os.makedirs(os.path.join(scratch, "scenes"), exist_ok=True)
+                project = os.path.join(scratch, "scenes", f"{name}.ron")
+                saved[name] = project
             elif copy is not None:
                 project = scratch_project(copy, scratch)
                 saved[name] = project
-            if copy is not None and not os.path.exists(project):
+            if copy not in (None, SAVE_AS) and not os.path.exists(project):
                 raise Failed(f"{project} is missing (run the '{copy}' story first)")
-            extra = ["--scene", project] if project else []
+            extra = ["--scene", project] if copy not in (None, SAVE_AS) else []
             studio = Studio(binary, out_dir, name, ":%d" % (40 + i), [*args, *extra], project)
             story(studio)
             print(f"ok: {name}")

@@ -44,7 +44,8 @@ pub use history_file::{
     save_history,
 };
 pub use mesh::{
-    MeshFormat, MeshRef, load_mesh, load_mesh_from_bytes, load_rest_mesh, load_rest_mesh_from_bytes,
+    MeshFormat, MeshPart, MeshRef, load_mesh, load_mesh_from_bytes, load_rest_mesh,
+    load_rest_mesh_from_bytes, mesh_parts,
 };
 pub use project::{
     EmbeddedMesh, ImportedMesh, Project, ProjectWarning, history_path_for, scene_path_for,

@@ -301,7 +301,63 @@ fn obj_bad_line(bytes: &[u8]) -> Option<(usize, String, String)> {
     None
 }
 
-fn load_obj(bytes: &[u8], path: &Path, select: Option<&str>) -> Result<Mesh> {
+/// One part of a mesh file that a `#name` selection can pick ([`MeshRef`]): an OBJ object
+/// or group, or a named glTF mesh.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MeshPart {
+    /// The part's name, as `#name` selects it.
+    pub name: String,
+    /// Its vertices as stored (before welding; every instance of a glTF mesh counted once).
+    pub vertices: usize,
+}
+
+/// The parts of the mesh file `path` that can be selected by name, in file order (an OBJ
+/// group named twice is one part). The file is read and parsed but no mesh is built, so
+/// the Studio can ask which part to import before loading it.
+///
+/// # Errors
+/// The file cannot be read, has an unsupported extension, or does not parse.
+pub fn mesh_parts(path: &Path) -> Result<Vec<MeshPart>> {
+    let format = MeshFormat::from_path(path)?;
+    let bytes = crate::read_file(path).map_err(|source| IoError::Read {
+        path: path.to_owned(),
+        source,
+    })?;
+    let mut parts: Vec<MeshPart> = Vec::new();
+    let mut add = |name: &str, vertices: usize| match parts.iter_mut().find(|p| p.name == name) {
+        Some(p) => p.vertices += vertices,
+        None => parts.push(MeshPart {
+            name: name.to_owned(),
+            vertices,
+        }),
+    };
+    match format {
+        MeshFormat::Obj => {
+            for m in parse_obj(&bytes, path)? {
+                add(&m.name, m.mesh.positions.len() / 3);
+            }
+        }
+        MeshFormat::Gltf => {
+            let (document, _) = parse_gltf(&bytes, path)?;
+            for m in document.meshes() {
+                let Some(name) = m.name() else {
+                    continue;
+                };
+                let vertices = m
+                    .primitives()
+                    .filter_map(|p| p.get(&gltf::Semantic::Positions))
+                    .map(|a| a.count())
+                    .sum();
+                add(name, vertices);
+            }
+        }
+    }
+    Ok(parts)
+}
+
+/// Checks every line of an OBJ file and parses it with tobj (triangulated, one index per
+/// vertex, materials never opened).
+fn parse_obj(bytes: &[u8], path: &Path) -> Result<Vec<tobj::Model>> {
     let mut reader = bytes;
     let options = tobj::LoadOptions {
         single_index: true,
@@ -327,6 +383,11 @@ fn load_obj(bytes: &[u8], path: &Path, select: Option<&str>) -> Result<Mesh> {
         path: path.to_owned(),
         source,
     })?;
+    Ok(models)
+}
+
+fn load_obj(bytes: &[u8], path: &Path, select: Option<&str>) -> Result<Mesh> {
+    let models = parse_obj(bytes, path)?;
     if let Some(name) = select
         && !models.iter().any(|m| m.name == name)
     {
@@ -407,7 +468,9 @@ fn check_attribute_accessors(root: &gltf::json::Root, path: &Path) -> Result<()>
     Ok(())
 }
 
-fn load_gltf(bytes: &[u8], path: &Path, base: Option<&Path>, select: Option<&str>) -> Result<Mesh> {
+/// Parses a glTF file's structure (JSON and, for GLB, the binary chunk), checked where the
+/// gltf crate would panic; buffers are not loaded.
+fn parse_gltf(bytes: &[u8], path: &Path) -> Result<(gltf::Document, Option<Vec<u8>>)> {
     // gltf 1.4.1 subtracts the header's size from the declared length unchecked
     // (binary.rs:252): a length below 12 overflowed (a panic where overflow is checked).
     if let Some(header) = bytes.strip_prefix(b"glTF")
@@ -430,6 +493,11 @@ fn load_gltf(bytes: &[u8], path: &Path, base: Option<&Path>, select: Option<&str
     check_attribute_accessors(raw.document.as_json(), path)?;
     let blob = raw.blob;
     let document = gltf::Document::from_json(raw.document.into_json()).map_err(gltf_error(path))?;
+    Ok((document, blob))
+}
+
+fn load_gltf(bytes: &[u8], path: &Path, base: Option<&Path>, select: Option<&str>) -> Result<Mesh> {
+    let (document, blob) = parse_gltf(bytes, path)?;
     let buffers = crate::gltf_buffers::load_buffers(&document, base, blob, path)?;
 
     // Mesh instances with their world transforms.

@@ -503,18 +503,32 @@ impl Project {
     /// `head-2`, ...); its source is relative to the project's directory, or absolute when
     /// the project has none yet. Errors name the mesh file.
     pub fn import_mesh(&mut self, path: impl AsRef<Path>) -> Result<ImportedMesh> {
+        self.import_mesh_part(path, None)
+    }
+
+    /// [`Project::import_mesh`] of one part of the file (an OBJ object or group, a named
+    /// glTF mesh; see [`crate::mesh::mesh_parts`]), or of the whole file with `None`. The
+    /// source is `path#part` and the node is named after the part.
+    pub fn import_mesh_part(
+        &mut self,
+        path: impl AsRef<Path>,
+        part: Option<&str>,
+    ) -> Result<ImportedMesh> {
         let path = path.as_ref();
         let rest = Arc::new(load_rest_mesh(&MeshRef {
             path: path.to_owned(),
-            select: None,
+            select: part.map(ToOwned::to_owned),
         })?);
-        let source = match &self.source_dir {
+        let mut source = match &self.source_dir {
             Some(dir) => relative_path(path, dir),
             None => slashes(&normalize(path)),
         };
-        let stem = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
+        if let Some(part) = part {
+            source = format!("{source}#{part}");
+        }
+        let stem = part
+            .map(ToOwned::to_owned)
+            .or_else(|| path.file_stem().map(|s| s.to_string_lossy().into_owned()))
             .filter(|s| !s.is_empty())
             .unwrap_or_else(|| "mesh".to_owned());
         let node = Node {

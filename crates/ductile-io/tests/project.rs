@@ -419,3 +419,37 @@ fn a_version_1_history_still_opens() {
     assert_eq!(v1.history().cursor(), 1);
     assert_eq!(v1.document(), v2.document());
 }
+
+#[test]
+fn a_part_of_a_file_is_listed_imported_and_saved_with_its_selection() {
+    let (_dir, root) = layout();
+    let parts = ductile_io::mesh_parts(&root.join("src/meshes/parts.obj")).unwrap();
+    let names: Vec<(&str, usize)> = parts
+        .iter()
+        .map(|p| (p.name.as_str(), p.vertices))
+        .collect();
+    assert_eq!(names, [("a", 4), ("b", 4)]);
+    let head =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/meshes/lee-perry-smith-head.glb");
+    let glb = ductile_io::mesh_parts(&head).unwrap();
+    assert_eq!(glb.len(), 1, "{glb:?}");
+    assert_eq!(glb[0].name, "LeePerrySmith");
+    assert!(ductile_io::mesh_parts(&root.join("src/scene.ron")).is_err());
+
+    let mut p = Project::new_empty();
+    let imported = p
+        .import_mesh_part(root.join("src/meshes/parts.obj"), Some("b"))
+        .unwrap();
+    assert_eq!(imported.node.name, "b", "named after the part");
+    assert_eq!(imported.rest.topology().vertex_count(), 4, "part b only");
+    let op = Operation::add_node(p.document(), imported.node);
+    p.push(op, "", 0, None).unwrap();
+    p.save_as(root.join("new.ron")).unwrap();
+    assert_eq!(source(p.document(), "b"), "src/meshes/parts.obj#b");
+    let (mut q, _) = Project::open(root.join("new.ron")).unwrap();
+    assert_eq!(q.rest_mesh("b").unwrap().topology().vertex_count(), 4);
+    let missing = p
+        .import_mesh_part(root.join("src/meshes/parts.obj"), Some("c"))
+        .unwrap_err();
+    assert!(missing.to_string().contains("'c'"), "{missing}");
+}

@@ -119,7 +119,7 @@ pub fn add_nodes(
         let Some(mesh) = selection.mesh_in_focus(document) else {
             notices
                 .0
-                .push("Add: the scene has no mesh (File ▸ Import mesh…)".to_owned());
+                .push("Add: the scene has no mesh (File > Import mesh…)".to_owned());
             continue;
         };
         match request.request {

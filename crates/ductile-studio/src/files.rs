@@ -72,8 +72,10 @@ pub enum StudioAction {
     SaveAsPath(PathBuf),
     /// Choose a mesh to import.
     ImportMesh,
-    /// Import this mesh file.
+    /// Import this mesh file (asking which part when it holds several).
     ImportPath(PathBuf),
+    /// Import this part of the mesh file (`None`: the whole file).
+    ImportPart(PathBuf, Option<String>),
     /// Choose where to export.
     ExportGltf,
     /// Export the deformed meshes to this file.
@@ -124,6 +126,84 @@ pub struct FileDialogs {
     pub dialog: Option<(DialogPurpose, FileDialog)>,
     /// An action waiting for "discard unsaved changes?".
     pub confirm: Option<StudioAction>,
+    /// A mesh file of several parts waiting for the choice of what to import.
+    pub parts: Option<PartChoice>,
+}
+
+/// The question "import which part?" for a mesh file of several parts (OBJ objects or
+/// groups, named glTF meshes), as Blender's importers offer to split or pick them.
+#[derive(Debug, Clone)]
+pub struct PartChoice {
+    /// The file.
+    pub path: PathBuf,
+    /// Its parts, the largest first.
+    pub parts: Vec<ductile_io::MeshPart>,
+    /// The chosen part (`None`: the whole file).
+    pub chosen: Option<usize>,
+}
+
+impl PartChoice {
+    /// The question for `parts` of the file `path`, the largest part first and the whole
+    /// file chosen.
+    #[must_use]
+    pub fn new(path: PathBuf, mut parts: Vec<ductile_io::MeshPart>) -> Self {
+        parts.sort_by(|a, b| b.vertices.cmp(&a.vertices).then(a.name.cmp(&b.name)));
+        Self {
+            path,
+            parts,
+            chosen: None,
+        }
+    }
+
+    /// Draws the choice; returns the import to do when the user confirms, and whether the
+    /// question is over (imported or cancelled).
+    pub fn show(&mut self, ctx: &egui::Context) -> (Option<StudioAction>, bool) {
+        let mut result = (None, false);
+        let file = self.path.file_name().map_or_else(
+            || self.path.display().to_string(),
+            |f| f.to_string_lossy().into_owned(),
+        );
+        let total: usize = self.parts.iter().map(|p| p.vertices).sum();
+        egui::Window::new("Import which part?")
+            .collapsible(false)
+            .resizable(false)
+            .anchor(egui::Align2::CENTER_CENTER, [0.0, 0.0])
+            .show(ctx, |ui| {
+                ui.label(format!("{file} holds {} parts.", self.parts.len()));
+                egui::ScrollArea::vertical()
+                    .max_height(220.0)
+                    .show(ui, |ui| {
+                        ui.selectable_value(
+                            &mut self.chosen,
+                            None,
+                            format!("Whole file ({total} vertices)"),
+                        );
+                        for (i, p) in self.parts.iter().enumerate() {
+                            ui.selectable_value(
+                                &mut self.chosen,
+                                Some(i),
+                                format!("{} ({} vertices)", p.name, p.vertices),
+                            );
+                        }
+                    });
+                ui.horizontal(|ui| {
+                    let enter = ui.input(|i| i.key_pressed(egui::Key::Enter));
+                    if ui.button("Import").clicked() || enter {
+                        let part = self.chosen.map(|i| self.parts[i].name.clone());
+                        result = (
+                            Some(StudioAction::ImportPart(self.path.clone(), part)),
+                            true,
+                        );
+                    }
+                    if ui.button("Cancel").clicked()
+                        || ui.input(|i| i.key_pressed(egui::Key::Escape))
+                    {
+                        result.1 = true;
+                    }
+                });
+            });
+        result
+    }
 }
 
 impl FileDialogs {
@@ -197,6 +277,15 @@ impl FileDialogs {
                 self.dialog = None;
             }
         }
+        if let Some(choice) = &mut self.parts {
+            let (action, done) = choice.show(ctx);
+            if action.is_some() {
+                chosen = action;
+            }
+            if done {
+                self.parts = None;
+            }
+        }
         if let Some(action) = self.confirm.clone() {
             egui::Window::new("Unsaved changes")
                 .collapsible(false)
@@ -236,8 +325,8 @@ pub fn run_actions(
     mut export: ResMut<ExportJob>,
     mut autosave: ResMut<crate::autosave::Autosave>,
 ) {
-    let actions: Vec<StudioAction> = actions.read().cloned().collect();
-    for action in actions {
+    let mut queue: std::collections::VecDeque<StudioAction> = actions.read().cloned().collect();
+    while let Some(action) = queue.pop_front() {
         let (action, confirmed) = match action {
             StudioAction::Discard(a) => (*a, true),
             a => (a, false),
@@ -317,11 +406,20 @@ pub fn run_actions(
                 }
             }
             StudioAction::ImportMesh => dialogs.open(DialogPurpose::Import, project_dir),
-            StudioAction::ImportPath(path) => {
+            StudioAction::ImportPath(path) => match ductile_io::mesh_parts(&path) {
+                Ok(parts) if parts.len() > 1 => {
+                    dialogs.parts = Some(PartChoice::new(path, parts));
+                }
+                Ok(_) => {
+                    queue.push_back(StudioAction::ImportPart(path, None));
+                }
+                Err(e) => notice(Err(ductile_io::report(&e))),
+            },
+            StudioAction::ImportPart(path, part) => {
                 project
                     .0
                     .set_state(doc.document().clone(), doc.history().clone());
-                match project.0.import_mesh(&path) {
+                match project.0.import_mesh_part(&path, part.as_deref()) {
                     Ok(imported) => {
                         if let ductile_scene::document::NodeKind::Mesh(m) = &imported.node.kind {
                             rests.insert(m.source.clone(), (*imported.rest).clone());
@@ -330,7 +428,10 @@ pub fn run_actions(
                         let op = Operation::add_node(doc.shown(), imported.node);
                         edits.write(DocumentCommand::Apply {
                             op: Box::new(op),
-                            label: format!("import {}", path.display()),
+                            label: match &part {
+                                Some(p) => format!("import {}#{p}", path.display()),
+                                None => format!("import {}", path.display()),
+                            },
                             gesture: None,
                         });
                         frame.0 = true;

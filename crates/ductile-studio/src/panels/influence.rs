@@ -64,7 +64,7 @@ impl InfluenceEditor {
         ui.horizontal_wrapped(|ui| {
             ui.label("volumes");
             if volumes.is_empty() {
-                ui.weak("none in the scene (Add ▸ volume)");
+                ui.weak("none in the scene (Add > volume)");
             }
             for v in &volumes {
                 let mut on = inf.volumes.iter().any(|x| x == v);

@@ -46,7 +46,7 @@ impl StackPanel {
     pub fn show(&mut self, ui: &mut egui::Ui, cx: &mut PanelContext<'_>) {
         let doc = cx.doc.shown();
         let Some(mesh_name) = cx.selection.mesh_in_focus(doc) else {
-            ui.weak("No mesh in the scene. File ▸ Import mesh… adds one.");
+            ui.weak("No mesh in the scene. File > Import mesh… adds one.");
             return;
         };
         let Ok(mesh) = doc.mesh(&mesh_name) else {
