@@ -21,7 +21,8 @@ pixel for pixel) before redoing them and going on:
    applied in a batch (`ductile apply --input … --out-dir`, 2 jobs) to Spot and four props
    made from it, written to OUT_DIR/technical-batch/.
 5. identikit (the head): a free point, faces A and B saved as variants, the morph typed to 0
-   and 1 (A and B pixel for pixel) and dragged between them.
+   and 1 (A and B pixel for pixel) and dragged between them; File > Export variants as morph
+   targets writes OUT_DIR/identikit-variants.glb.
 6. animate (from the README's start: File > New, File > Import mesh... of MakeHuman's base
    mesh, its body chosen in "Import which part?"): a bend keyed straight at frame 0 (the edit
    of the animated target offered to be keyed, and keyed) and bent at 24, a neck twist
@@ -70,7 +71,8 @@ OFFER = (440, 330, 840, 470)
 RECOVER = (504, 450)
 FILE_MENU = (19, 11)
 # Rows of the File menu.
-FILE = {"New": (30, 36), "Import mesh": (60, 129), "Export animation": (73, 171)}
+FILE = {"New": (30, 36), "Import mesh": (60, 129), "Export animation": (73, 171),
+        "Export variants": (100, 192)}
 # The question "Import which part?" for MakeHuman's file: its second row (the body, the
 # largest part) and its Import button.
 IMPORT_PART_BODY = (543, 336)
@@ -650,6 +652,27 @@ def story_identikit(studio):
     expect(differing(half, at_a) > 100 and differing(half, at_b) > 100,
            "half way, the morph is not between A and B")
     undo_check(studio, at_b, "9-morph-dragged", "of the morph drag")
+    # File > Export variants as morph targets...: the head with one morph target per face,
+    # written in the background (CI validates it with the other stories' .glb files).
+    out = os.path.join(os.path.abspath(studio.out_dir), "identikit-variants.glb")
+    if os.path.exists(out):
+        os.remove(out)
+    studio.click(*FILE_MENU)
+    time.sleep(1.0)
+    studio.click(*FILE["Export variants"])
+    studio.shot("10-export-variants", settle=2.0)
+    type_path(studio, out, field="file name")
+    for _ in range(60):
+        if os.path.exists(out):
+            break
+        time.sleep(0.5)
+    studio.shot("11-variants-exported", settle=1.0)
+    expect(os.path.exists(out), f"File > Export variants as morph targets wrote no {out}")
+    with open(out, "rb") as f:
+        data = f.read()
+    expect(data[:4] == b"glTF" and b'"targetNames"' in data and b'"variant"' in data
+           and b'"variant-2"' in data,
+           "the exported file has no morph targets named after the two variants")
 
 
 # The variants panel with nothing selected: Save face, and once two variants are listed, the

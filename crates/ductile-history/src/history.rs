@@ -115,8 +115,9 @@ impl History {
     /// Applies `op` to `doc` and records it as the next step, dropping the redo tail. With a
     /// `gesture` id equal to the previous step's, and an operation that continues it on the
     /// same target ([`Operation::can_merge`]), the previous step absorbs it instead (it keeps
-    /// its label, time and first `old` value, and takes the new value). An empty `label` is
-    /// replaced by [`Operation::describe`]. On error nothing changes.
+    /// its time and first `old` value, and takes the new value and the new label, which
+    /// describes the gesture's end: "morph 'a' to 'b' at 0.50", not where the drag began). An
+    /// empty `label` is replaced by [`Operation::describe`]. On error nothing changes.
     pub fn push(
         &mut self,
         doc: &mut Document,
@@ -127,15 +128,16 @@ impl History {
     ) -> Result<()> {
         op.apply(doc)?;
         self.entries.truncate(self.cursor);
+        let mut label = label.into();
+        if label.is_empty() {
+            label = op.describe();
+        }
         if let (Some(g), Some(last)) = (gesture, self.entries.last_mut())
             && last.gesture == Some(g)
             && last.op.merge(&op)
         {
+            last.label = label;
             return Ok(());
-        }
-        let mut label = label.into();
-        if label.is_empty() {
-            label = op.describe();
         }
         self.entries.push(Entry {
             label,

@@ -302,10 +302,21 @@ fn gesture_merges_into_one_step_and_undo_restores_the_start() {
     for k in 1..=10 {
         let t = Transform::from_translation(Vec3::new(0.1 * k as f32, 0.0, 0.0));
         let op = Operation::set_transform(&doc, "vol", t).unwrap();
-        history.push(&mut doc, op, "drag", k, Some(7)).unwrap();
+        history
+            .push(&mut doc, op, format!("drag to {k}"), k, Some(7))
+            .unwrap();
     }
     assert_eq!(history.len(), 1);
-    assert_eq!(history.entries()[0].time_ms, 1);
+    assert_eq!(
+        history.entries()[0].time_ms,
+        1,
+        "the time of the first edit"
+    );
+    assert_eq!(
+        history.entries()[0].label,
+        "drag to 10",
+        "the label of the last edit (where the gesture ended)"
+    );
     assert_eq!(
         doc.node("vol").unwrap().transform.translation,
         Vec3::new(1.0, 0.0, 0.0)

@@ -373,8 +373,12 @@ fn evaluate_all(scene: &LoadedScene, doc: &Document) -> Result<Vec<Deformed>> {
 }
 
 /// The rest meshes as base and one morph target per variant (named after it, in name
-/// order, default weight 0), ready for [`crate::export::export_gltf_with`].
-pub fn variant_morphs(scene: &LoadedScene) -> Result<(Vec<Deformed>, Morphs)> {
+/// order, default weight 0), ready for [`crate::export::export_gltf_with`]. `progress` is
+/// told the variants evaluated and their count, after each.
+pub fn variant_morphs(
+    scene: &LoadedScene,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<(Vec<Deformed>, Morphs)> {
     let doc = &scene.document;
     if doc.variants.is_empty() {
         return Err(IoError::Bake {
@@ -393,7 +397,9 @@ pub fn variant_morphs(scene: &LoadedScene) -> Result<(Vec<Deformed>, Morphs)> {
     }
     let bases: Vec<Deformed> = scene.meshes.iter().map(|m| rest_output(&m.rest)).collect();
     let mut targets: Vec<Vec<MorphTarget>> = vec![Vec::new(); scene.meshes.len()];
-    for (name, v) in &doc.variants {
+    let total = doc.variants.len();
+    progress(0, total);
+    for (done, (name, v)) in doc.variants.iter().enumerate() {
         let applied = doc
             .with_states(&v.states)
             .map_err(|source| IoError::SceneProblem {
@@ -412,6 +418,7 @@ pub fn variant_morphs(scene: &LoadedScene) -> Result<(Vec<Deformed>, Morphs)> {
             }
             targets[i].push(target(name.clone(), &bases[i], d));
         }
+        progress(done + 1, total);
     }
     let weights = targets.iter().map(|t| vec![0.0; t.len()]).collect();
     Ok((
@@ -424,9 +431,14 @@ pub fn variant_morphs(scene: &LoadedScene) -> Result<(Vec<Deformed>, Morphs)> {
     ))
 }
 
-/// Writes the rest meshes with one morph target per variant to `out`.
-pub fn export_variant_morphs(scene: &LoadedScene, out: &Path) -> Result<Vec<String>> {
-    let (bases, morphs) = variant_morphs(scene)?;
+/// Writes the rest meshes with one morph target per variant to `out` (`progress` as for
+/// [`variant_morphs`]).
+pub fn export_variant_morphs(
+    scene: &LoadedScene,
+    out: &Path,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Vec<String>> {
+    let (bases, morphs) = variant_morphs(scene, progress)?;
     let meshes: Vec<ExportMesh<'_>> = scene
         .meshes
         .iter()

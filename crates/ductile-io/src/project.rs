@@ -494,7 +494,7 @@ impl Project {
     /// the targets' names.
     pub fn export_variant_morphs(&mut self, path: impl AsRef<Path>) -> Result<Vec<String>> {
         let scene = self.loaded_scene()?;
-        export_variant_morphs(&scene, path.as_ref())
+        export_variant_morphs(&scene, path.as_ref(), &mut |_, _| {})
     }
 
     /// Loads the mesh file at `path` (glTF or OBJ) and makes a mesh node for it, without

@@ -29,6 +29,27 @@ pub struct RunningExport {
 }
 
 impl RunningExport {
+    /// Runs `work` on the background task pool; it reports its progress (done, in all)
+    /// through the function it is given and returns the message to show.
+    pub fn spawn(
+        what: String,
+        work: impl FnOnce(&mut dyn FnMut(usize, usize)) -> Result<String, String> + Send + 'static,
+    ) -> Self {
+        let progress = std::sync::Arc::new((AtomicUsize::new(0), AtomicUsize::new(0)));
+        let shared = std::sync::Arc::clone(&progress);
+        let task = bevy::tasks::AsyncComputeTaskPool::get().spawn(async move {
+            work(&mut |done: usize, total: usize| {
+                shared.0.store(done, Ordering::Relaxed);
+                shared.1.store(total, Ordering::Relaxed);
+            })
+        });
+        Self {
+            what,
+            progress,
+            task,
+        }
+    }
+
     /// The fraction done, in [0, 1].
     #[must_use]
     pub fn fraction(&self) -> f32 {
@@ -341,6 +362,7 @@ pub fn run_actions(
             continue;
         }
         let mut notice = |r: Result<String, String>| notices.push_result(r);
+        let exports_animation = matches!(action, StudioAction::ExportAnimationPath(_));
         match action {
             StudioAction::New => {
                 replace_project(
@@ -452,7 +474,7 @@ pub fn run_actions(
             StudioAction::ExportAnimation => {
                 dialogs.open(DialogPurpose::ExportAnimation, project_dir);
             }
-            StudioAction::ExportAnimationPath(path) => {
+            StudioAction::ExportAnimationPath(path) | StudioAction::ExportMorphsPath(path) => {
                 if export.0.is_some() {
                     notice(Err(
                         "an export is still running; wait for it to finish".into()
@@ -471,48 +493,40 @@ pub fn run_actions(
                         continue;
                     }
                 };
-                let progress = std::sync::Arc::new((AtomicUsize::new(0), AtomicUsize::new(0)));
-                let shared = std::sync::Arc::clone(&progress);
                 let out = path.clone();
-                let task = bevy::tasks::AsyncComputeTaskPool::get().spawn(async move {
+                let what = format!("exporting {}", path.display());
+                export.0 = Some(RunningExport::spawn(what, move |progress| {
                     let start = std::time::Instant::now();
-                    let options = ductile_io::bake::BakeOptions::timeline(&scene.document);
-                    let mut report = |done: usize, total: usize| {
-                        shared.0.store(done, Ordering::Relaxed);
-                        shared.1.store(total, Ordering::Relaxed);
+                    let seconds = || start.elapsed().as_secs_f64();
+                    let result = if exports_animation {
+                        let options = ductile_io::bake::BakeOptions::timeline(&scene.document);
+                        ductile_io::bake::export_animation(&scene, &out, &options, progress).map(
+                            |report| {
+                                format!(
+                                    "exported {}: {} frames, {} morph targets, in {:.1} s",
+                                    out.display(),
+                                    report.samples.len(),
+                                    report.targets.iter().map(|(_, n)| n).sum::<usize>(),
+                                    seconds()
+                                )
+                            },
+                        )
+                    } else {
+                        ductile_io::bake::export_variant_morphs(&scene, &out, progress).map(
+                            |names| {
+                                format!(
+                                    "exported {}: morph targets {}, in {:.1} s",
+                                    out.display(),
+                                    names.join(", "),
+                                    seconds()
+                                )
+                            },
+                        )
                     };
-                    ductile_io::bake::export_animation(&scene, &out, &options, &mut report)
-                        .map(|report| {
-                            format!(
-                                "exported {}: {} frames, {} morph targets, in {:.1} s",
-                                out.display(),
-                                report.samples.len(),
-                                report.targets.iter().map(|(_, n)| n).sum::<usize>(),
-                                start.elapsed().as_secs_f64()
-                            )
-                        })
-                        .map_err(|e| ductile_io::report(&e))
-                });
-                export.0 = Some(RunningExport {
-                    what: format!("exporting {}", path.display()),
-                    progress,
-                    task,
-                });
+                    result.map_err(|e| ductile_io::report(&e))
+                }));
             }
             StudioAction::ExportMorphs => dialogs.open(DialogPurpose::ExportMorphs, project_dir),
-            StudioAction::ExportMorphsPath(path) => {
-                project
-                    .0
-                    .set_state(doc.document().clone(), doc.history().clone());
-                match project.0.export_variant_morphs(&path) {
-                    Ok(names) => notice(Ok(format!(
-                        "exported {}: morph targets {}",
-                        path.display(),
-                        names.join(", ")
-                    ))),
-                    Err(e) => notice(Err(ductile_io::report(&e))),
-                }
-            }
             StudioAction::Undo => {
                 edits.write(DocumentCommand::Undo);
             }

@@ -21,7 +21,7 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: &Args, out: &mut dyn Write) -> anyhow::Result<u8> {
     let scene = super::load_input(&args.scene)?;
-    let names = export_variant_morphs(&scene, &args.output)
+    let names = export_variant_morphs(&scene, &args.output, &mut |_, _| {})
         .with_context(|| format!("cannot export morph targets to {}", args.output.display()))?;
     writeln!(
         out,
