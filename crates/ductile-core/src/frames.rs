@@ -174,13 +174,17 @@ pub fn closest_on_polyline(points: &[Vec3], x: Vec3) -> (usize, f32, f32) {
 /// Segments per block of a [`PolylineIndex`].
 const BLOCK: usize = 8;
 
-/// A polyline with bounding spheres over blocks of consecutive segments, for fast repeated
+/// A polyline with bounding boxes over blocks of consecutive segments, for fast repeated
 /// closest-point queries (the same answer as [`closest_on_polyline`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PolylineIndex {
     points: Vec<Vec3>,
-    /// Per block: first segment, one past the last segment, sphere centre and radius.
-    blocks: Vec<(usize, usize, Vec3, f32)>,
+    /// Per segment: its direction `p[s+1] − p[s]` and that direction's squared length, as
+    /// [`closest_on_polyline`] computes them (kept so that a query does not again).
+    segments: Vec<(Vec3, f32)>,
+    /// Per block: first segment, one past the last segment, and the corners of the box
+    /// around its points (a tighter bound than a sphere for the long thin blocks of a curve).
+    blocks: Vec<(usize, usize, Vec3, Vec3)>,
 }
 
 impl PolylineIndex {
@@ -199,12 +203,24 @@ impl PolylineIndex {
                 let (lo, hi) = span
                     .iter()
                     .fold((span[0], span[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-                let centre = (lo + hi) * 0.5;
-                let radius = span.iter().map(|p| p.distance(centre)).fold(0.0, f32::max);
-                (first, end, centre, radius)
+                // Padded so that a segment point as rounded (`p + d·f`) never lies outside.
+                let pad =
+                    (hi - lo).max_element() * 1e-4 + lo.abs().max(hi.abs()).max_element() * 1e-5;
+                (first, end, lo - Vec3::splat(pad), hi + Vec3::splat(pad))
             })
             .collect();
-        Some(Self { points, blocks })
+        let segments = points
+            .windows(2)
+            .map(|w| {
+                let d = w[1] - w[0];
+                (d, d.length_squared())
+            })
+            .collect();
+        Some(Self {
+            points,
+            segments,
+            blocks,
+        })
     }
 
     /// The indexed points.
@@ -213,31 +229,56 @@ impl PolylineIndex {
         &self.points
     }
 
-    /// Like [`closest_on_polyline`]: `(segment, fraction, squared distance)`. Blocks whose
-    /// bounding sphere is farther than the best distance found so far are skipped, starting
-    /// from the block nearest to `x`.
+    /// Like [`closest_on_polyline`]: `(segment, fraction, squared distance)`, the same
+    /// bits. Blocks whose bounding box is farther than the best distance found so far are
+    /// skipped, starting from the block nearest to `x`.
     #[must_use]
     pub fn closest(&self, x: Vec3) -> (usize, f32, f32) {
-        let bound = |b: &(usize, usize, Vec3, f32)| (x.distance(b.2) - b.3).max(0.0);
-        let start = (0..self.blocks.len())
-            .min_by(|&a, &b| bound(&self.blocks[a]).total_cmp(&bound(&self.blocks[b])))
-            .unwrap_or(0);
-        let search = |b: &(usize, usize, Vec3, f32)| {
-            let (s, f, d2) = closest_on_polyline(&self.points[b.0..=b.1], x);
-            (s + b.0, f, d2)
+        // The squared distance from `x` to a block's box: no point of the block is nearer.
+        let bound = |b: &(usize, usize, Vec3, Vec3)| {
+            (b.2 - x).max(x - b.3).max(Vec3::ZERO).length_squared()
         };
-        let mut best = search(&self.blocks[start]);
+        // Start with the first block of least bound, then search every block that may hold
+        // a nearer point. The answer is the least squared distance and, among equal ones,
+        // the earliest segment, whatever the order.
+        let mut start = (0, f32::INFINITY);
+        for (k, b) in self.blocks.iter().enumerate() {
+            let d = bound(b);
+            if d < start.1 {
+                start = (k, d);
+            }
+        }
+        let start = start.0;
+        let mut best = self.search(&self.blocks[start], x);
         for (k, b) in self.blocks.iter().enumerate() {
             if k == start {
                 continue;
             }
-            let lb = bound(b);
-            if lb * lb <= best.2 {
-                let c = search(b);
+            if bound(b) <= best.2 {
+                let c = self.search(b, x);
                 // Ties go to the earlier segment, as in `closest_on_polyline`.
                 if c.2 < best.2 || (c.2 == best.2 && c.0 < best.0) {
                     best = c;
                 }
+            }
+        }
+        best
+    }
+
+    /// [`closest_on_polyline`] over the segments of block `b`, with their directions and
+    /// squared lengths taken from the index (the same values, so the same bits).
+    fn search(&self, b: &(usize, usize, Vec3, Vec3), x: Vec3) -> (usize, f32, f32) {
+        let mut best = (b.0, 0.0, f32::INFINITY);
+        let segments = self.segments[b.0..b.1].iter().zip(&self.points[b.0..b.1]);
+        for (s, (&(d, l2), &p)) in (b.0..).zip(segments) {
+            let f = if l2 > 0.0 {
+                ((x - p).dot(d) / l2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let dist2 = (p + d * f).distance_squared(x);
+            if dist2 < best.2 {
+                best = (s, f, dist2);
             }
         }
         best
@@ -358,6 +399,34 @@ mod tests {
             let (si, fi, d2i) = index.closest(x);
             assert_eq!(d2, d2i, "{x}");
             assert!(s == si && f == fi || d2 == d2i);
+        }
+    }
+
+    #[test]
+    fn index_gives_the_brute_force_bits_on_short_and_long_polylines() {
+        // 40 blocks and 600 blocks.
+        for n in [321, 4801] {
+            let pl: Vec<Vec3> = (0..n)
+                .map(|k| {
+                    let s = k as f32 * 0.013;
+                    Vec3::new(s.cos() * (1.0 + 0.1 * s), s.sin(), 0.05 * s)
+                })
+                .collect();
+            let index = PolylineIndex::new(pl.clone()).unwrap();
+            for i in 0..2000 {
+                let x = Vec3::new(
+                    (i as f32 * 0.37).sin() * 3.0,
+                    (i as f32 * 0.71).cos() * 3.0,
+                    (i as f32 * 0.13).sin() * 2.0,
+                );
+                let brute = closest_on_polyline(&pl, x);
+                let indexed = index.closest(x);
+                assert_eq!(
+                    (brute.0, brute.1.to_bits(), brute.2.to_bits()),
+                    (indexed.0, indexed.1.to_bits(), indexed.2.to_bits()),
+                    "n = {n}, x = {x}"
+                );
+            }
         }
     }
 
