@@ -412,6 +412,19 @@ def forearm_up(shot):
     return sum(1 for _, _, c in pixels(shot, (745, 245, 800, 275)) if is_mesh(c))
 
 
+def written(studio, out, shot, what):
+    """The bytes of `out` once a background export has written it (within 30 s), after a
+    screenshot named `shot`; fails naming `what` when it never appears."""
+    for _ in range(60):
+        if os.path.exists(out):
+            break
+        time.sleep(0.5)
+    studio.shot(shot, settle=1.0)
+    expect(os.path.exists(out), f"{what} wrote no {out}")
+    with open(out, "rb") as f:
+        return f.read()
+
+
 def type_path(studio, path, field="path"):
     """Types `path` into the open file dialog and submits it: into its path field ("/"
     opens it, holding the folder shown), or into the save dialog's file name field (which
@@ -536,14 +549,7 @@ def story_animate(studio):
     time.sleep(2.0)
     studio.key("Return")
     out = os.path.join(os.path.dirname(scene), "animation.glb")
-    for _ in range(30):
-        if os.path.exists(out):
-            break
-        time.sleep(0.5)
-    studio.shot("11-exported", settle=1.0)
-    expect(os.path.exists(out), f"File > Export animation wrote no {out}")
-    with open(out, "rb") as f:
-        data = f.read()
+    data = written(studio, out, "11-exported", "File > Export animation")
     expect(data[:4] == b"glTF" and b'"targets"' in data and b'"animations"' in data,
            "the exported file is not a glTF with morph targets and an animation")
     # Its middle frame keeps the limb length: skeleton-style in-betweens interpolate the
@@ -662,14 +668,8 @@ def story_identikit(studio):
     studio.click(*FILE["Export variants"])
     studio.shot("10-export-variants", settle=2.0)
     type_path(studio, out, field="file name")
-    for _ in range(60):
-        if os.path.exists(out):
-            break
-        time.sleep(0.5)
-    studio.shot("11-variants-exported", settle=1.0)
-    expect(os.path.exists(out), f"File > Export variants as morph targets wrote no {out}")
-    with open(out, "rb") as f:
-        data = f.read()
+    data = written(studio, out, "11-variants-exported",
+                   "File > Export variants as morph targets")
     expect(data[:4] == b"glTF" and b'"targetNames"' in data and b'"variant"' in data
            and b'"variant-2"' in data,
            "the exported file has no morph targets named after the two variants")

@@ -645,25 +645,7 @@ mod tests {
 
     #[test]
     fn the_document_is_shown_and_edited_at_the_current_time() -> Result<()> {
-        use ductile_scene::prelude::{Key, Value};
-        let mut d = Document::default();
-        Operation::add_node(&d, {
-            let Operation::AddNode { node, .. } = group("g") else {
-                unreachable!()
-            };
-            node
-        })
-        .apply(&mut d)?;
-        let keys = vec![
-            Key::new(0.0, Value::Vector(Vec3::ZERO)),
-            Key::new(1.0, Value::Vector(Vec3::X)),
-        ];
-        d.animation
-            .tracks
-            .entry("g".into())
-            .or_default()
-            .insert("transform.translation".into(), keys);
-        let mut doc = SceneDocument::new(d);
+        let mut doc = keyed_group()?;
         doc.set_auto_key(true)?;
         let r = doc.revision();
         doc.set_time(0.5);
@@ -692,7 +674,7 @@ mod tests {
         Ok(())
     }
 
-    /// A group "g" whose translation is keyed 0 at 0 s and X at 1 s, posed at 0.5 s.
+    /// A group "g" whose translation is keyed 0 at 0 s and X at 1 s, at time 0.
     fn keyed_group() -> Result<SceneDocument> {
         use ductile_scene::prelude::{Key, Value};
         let mut d = Document::default();
@@ -706,9 +688,7 @@ mod tests {
             .entry("g".into())
             .or_default()
             .insert("transform.translation".into(), keys);
-        let mut doc = SceneDocument::new(d);
-        doc.set_time(0.5);
-        Ok(doc)
+        Ok(SceneDocument::new(d))
     }
 
     fn moved_to(doc: &SceneDocument, to: Vec3) -> Result<Operation> {
@@ -720,6 +700,7 @@ mod tests {
     #[test]
     fn without_auto_key_an_edit_between_keys_is_offered_then_keyed_in_one_step() -> Result<()> {
         let mut doc = keyed_group()?;
+        doc.set_time(0.5);
         assert!(!doc.auto_key(), "auto-key is off by default, as in Blender");
         let at = |doc: &SceneDocument| doc.shown().node("g").unwrap().transform.translation;
         // A drag of two edits in one gesture: shown, not recorded, offered as one edit.
@@ -771,6 +752,7 @@ mod tests {
     #[test]
     fn an_offered_edit_is_reverted_by_undo_revert_or_a_new_frame() -> Result<()> {
         let mut doc = keyed_group()?;
+        doc.set_time(0.5);
         let at = |doc: &SceneDocument| doc.shown().node("g").unwrap().transform.translation;
         let rest = at(&doc);
         let r = doc.revision();

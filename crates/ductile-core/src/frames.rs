@@ -157,18 +157,24 @@ pub fn closest_on_polyline(points: &[Vec3], x: Vec3) -> (usize, f32, f32) {
     let mut best = (0, 0.0, f32::INFINITY);
     for (s, w) in points.windows(2).enumerate() {
         let d = w[1] - w[0];
-        let l2 = d.length_squared();
-        let f = if l2 > 0.0 {
-            ((x - w[0]).dot(d) / l2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let dist2 = (w[0] + d * f).distance_squared(x);
+        let (f, dist2) = project_on_segment(w[0], d, d.length_squared(), x);
         if dist2 < best.2 {
             best = (s, f, dist2);
         }
     }
     best
+}
+
+/// The fraction `f ∈ [0, 1]` of the point of segment `p + f·d` nearest to `x` (`l2 = |d|²`;
+/// 0 for a zero-length segment) and its squared distance to `x`.
+#[inline]
+fn project_on_segment(p: Vec3, d: Vec3, l2: f32, x: Vec3) -> (f32, f32) {
+    let f = if l2 > 0.0 {
+        ((x - p).dot(d) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (f, (p + d * f).distance_squared(x))
 }
 
 /// Segments per block of a [`PolylineIndex`].
@@ -271,12 +277,7 @@ impl PolylineIndex {
         let mut best = (b.0, 0.0, f32::INFINITY);
         let segments = self.segments[b.0..b.1].iter().zip(&self.points[b.0..b.1]);
         for (s, (&(d, l2), &p)) in (b.0..).zip(segments) {
-            let f = if l2 > 0.0 {
-                ((x - p).dot(d) / l2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let dist2 = (p + d * f).distance_squared(x);
+            let (f, dist2) = project_on_segment(p, d, l2, x);
             if dist2 < best.2 {
                 best = (s, f, dist2);
             }
