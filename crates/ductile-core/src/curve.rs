@@ -27,6 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all, bernstein_all_with_derivative};
 use crate::chunks::{BIND_CHUNK, active_mask};
+use crate::curve_pieces::CurvePieces;
 use crate::error::{CoreError, Result, check_finite_vec3};
 use crate::frames::PolylineIndex;
 use crate::tool::{BindInput, Deformer};
@@ -34,11 +35,8 @@ use crate::tool::{BindInput, Deformer};
 /// Largest number of control points a Bézier polygon may have (degree [`MAX_DEGREE`]).
 pub const MAX_BEZIER_POINTS: usize = MAX_DEGREE + 1;
 
-/// Samples per control point of the polyline used to seed the closest-point search.
+/// Samples per control point of the polyline drawn for a curve ([`CurveEvaluator::samples`]).
 const SAMPLES_PER_POINT: usize = 16;
-
-/// Gauss–Newton refinements of a closest-point parameter.
-const REFINE_STEPS: usize = 4;
 
 /// The polynomial basis of a control polygon.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -249,36 +247,6 @@ impl CurveEvaluator {
         })
     }
 
-    /// The parameter of the point of the curve closest to `x`: the closest point of the
-    /// indexed polyline `samples` (from [`CurveEvaluator::samples`]), refined by
-    /// Gauss–Newton steps `t ← t − (C − x)·C' / |C'|²` clamped to `[0, 1]` and kept only
-    /// while they bring the point closer. Returns `(t, |x − C(t)|²)`.
-    #[must_use]
-    pub fn closest_parameter(&self, ctrl: &[Vec3], samples: &PolylineIndex, x: Vec3) -> (f32, f32) {
-        let (s, f, _) = samples.closest(x);
-        let step = 1.0 / (samples.points().len() - 1) as f32;
-        let mut t = ((s as f32 + f) * step).clamp(0.0, 1.0);
-        // One basis evaluation per step: the point and derivative at the accepted parameter
-        // serve the next step.
-        let (mut c, mut dc) = self.point_and_derivative(ctrl, t);
-        let mut best = c.distance_squared(x);
-        for _ in 0..REFINE_STEPS {
-            let l2 = dc.length_squared();
-            if l2 <= f32::EPSILON * f32::EPSILON {
-                break;
-            }
-            let next = (t - (c - x).dot(dc) / l2).clamp(0.0, 1.0);
-            let (cn, dn) = self.point_and_derivative(ctrl, next);
-            let d = cn.distance_squared(x);
-            if d < best {
-                (best, t, c, dc) = (d, next, cn, dn);
-            } else {
-                break;
-            }
-        }
-        (t, best)
-    }
-
     /// The curve sampled at `t = k / m`, `k = 0..=m`, with `m = 16 · count`, indexed for
     /// closest-point queries.
     #[must_use]
@@ -400,7 +368,7 @@ impl Deformer for CurveTool {
 
     fn bind(&self, input: &BindInput<'_>) -> Result<CurveBind> {
         let evaluator = CurveEvaluator::new(self.basis, self.rest.len(), "curve tool")?;
-        let samples = evaluator.samples(&self.rest);
+        let pieces = CurvePieces::new(&evaluator, &self.rest);
         let n = input.positions.len();
         let p = evaluator.degree();
         let stride = 2 * p + 1;
@@ -422,13 +390,12 @@ impl Deformer for CurveTool {
                     return;
                 }
                 let x = input.positions[k];
-                let (t, _) = evaluator.closest_parameter(&self.rest, &samples, x);
-                *param = t;
-                *offset = x - evaluator.point(&self.rest, t);
-                let (w, m) = (evaluator.point_weights(t), evaluator.segment_weights(t));
-                *first = (w.first as u32, m.first as u32);
-                weights[..=p].copy_from_slice(&w.values[..=p]);
-                weights[p + 1..].copy_from_slice(&m.values[..p]);
+                let (c, _) = pieces.closest(x);
+                *param = c.t;
+                *offset = x - c.point;
+                let f = pieces.first(c.piece) as u32;
+                *first = (f, f);
+                pieces.weights(c.piece, c.u, weights);
             });
         Ok(CurveBind {
             evaluator,

@@ -13,6 +13,7 @@ pub mod axial;
 pub mod basis;
 pub mod chunks;
 pub mod curve;
+pub mod curve_pieces;
 pub mod direct_ffd;
 pub mod dogme;
 pub mod error;

@@ -1,0 +1,596 @@
+//! A Bézier or B-spline curve cut into short polynomial pieces in power form, for fast
+//! closest-point queries and basis weights (the binds of the curve tools).
+//!
+//! The parameter domain `[0, 1]` is cut into `m` pieces of equal length `h = 1/m`; for a
+//! B-spline every knot is a piece boundary (each of the `S = count − p` knot spans holds
+//! `q = ⌈16·count / S⌉` pieces), so on each piece the curve and every basis function is one
+//! polynomial. In the piece's local parameter `u = (t − k h) / h ∈ [0, 1]`:
+//!
+//! * the curve `C(u) = Σⱼ aⱼ uʲ` and its derivative `dC/du = Σⱼ (j+1) aⱼ₊₁ uʲ`,
+//! * the `p + 1` non-zero point basis functions `Nᵢ(u)` (Bernstein `Bᵢⁿ` or B-spline `Nᵢ,ₚ`)
+//!   and the `p` segment basis functions `Mᵢ(u)` of degree `p − 1`
+//!   ([`CurveEvaluator::segment_weights`]),
+//!
+//! are evaluated by Horner's rule: a handful of fused operations instead of a knot search and
+//! the divisions of the Cox–de Boor recurrence. The coefficients are computed once per curve
+//! in `f64` — each function is evaluated in `f64` at `p + 1` Chebyshev nodes of the piece and
+//! interpolated (Newton's divided differences, expanded to powers) — then rounded to `f32`.
+//! A piece is short (`h ≤ 1/32`), so its coefficients fall off like `hʲ/j!` and the power
+//! form is well conditioned even at degree 15.
+//!
+//! Closest points: the piece boundaries form a polyline (indexed by [`PolylineIndex`]); its
+//! closest point seeds Gauss–Newton steps `u ← u − (C − x)·C' / |C'|²` that move from piece to
+//! piece and are kept only while they bring the point closer — the search
+//! `docs/algorithms/curve-deformation.md` describes.
+
+use glam::Vec3;
+
+use crate::curve::{CurveBasis, CurveEvaluator};
+use crate::frames::PolylineIndex;
+
+/// Pieces per control point (at least; a B-spline rounds up to whole knot spans).
+const PIECES_PER_POINT: usize = 16;
+
+/// Gauss–Newton refinements of a closest-point parameter.
+const REFINE_STEPS: usize = 4;
+
+/// The point of a curve closest to a query point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Closest {
+    /// The piece holding it.
+    pub piece: usize,
+    /// Its local parameter `u ∈ [0, 1]` in the piece.
+    pub u: f32,
+    /// Its curve parameter `t = (piece + u) / m ∈ [0, 1]`.
+    pub t: f32,
+    /// The curve point `C(t)`.
+    pub point: Vec3,
+}
+
+/// A curve in power-form pieces (module documentation).
+#[derive(Debug, Clone)]
+pub struct CurvePieces {
+    /// The curve degree `p`.
+    degree: usize,
+    /// Number of pieces `m`.
+    count: usize,
+    /// Per piece, `p + 1` coefficients of `C(u)`.
+    curve: Vec<Vec3>,
+    /// Per piece, `p` coefficients of `dC/du` (at least one, zero for a constant).
+    tangent: Vec<Vec3>,
+    /// Per piece, `p + 1` functions × `p + 1` coefficients of the point basis.
+    point_basis: Vec<f32>,
+    /// Per piece, `p` functions × `p` coefficients of the segment basis.
+    segment_basis: Vec<f32>,
+    /// Per piece, the index of its first non-zero point and segment function.
+    firsts: Vec<u32>,
+    /// The `2p + 1` weights at the curve's end `t = 1`, exactly as the recurrence gives them
+    /// (every function but the last 0): the power form's sum there is only nearly 0.
+    end: Vec<f32>,
+    /// The piece boundaries `C(k/m)`, `k = 0..=m`.
+    index: PolylineIndex,
+}
+
+impl CurvePieces {
+    /// Cuts the curve of `evaluator` with control points `ctrl` (as many as the evaluator's
+    /// count) into pieces.
+    ///
+    /// # Panics
+    /// When `ctrl.len()` differs from the evaluator's count.
+    #[must_use]
+    pub fn new(evaluator: &CurveEvaluator, ctrl: &[Vec3]) -> Self {
+        assert_eq!(
+            ctrl.len(),
+            evaluator.count(),
+            "one control point per basis function"
+        );
+        let p = evaluator.degree();
+        let n = evaluator.count();
+        // Knot spans: one Bézier span, or the `n − p` spans of a clamped uniform B-spline.
+        let spans = match evaluator.basis() {
+            CurveBasis::Bezier => 1,
+            CurveBasis::BSpline { .. } => n - p,
+        };
+        let per_span = (PIECES_PER_POINT * n).div_ceil(spans);
+        let count = spans * per_span;
+        let nodes = chebyshev_nodes(p + 1);
+        let seg_nodes = chebyshev_nodes(p.max(1));
+        let mut pieces = Self {
+            degree: p,
+            count,
+            curve: Vec::with_capacity(count * (p + 1)),
+            tangent: Vec::with_capacity(count * p.max(1)),
+            point_basis: Vec::with_capacity(count * (p + 1) * (p + 1)),
+            segment_basis: Vec::with_capacity(count * p * p),
+            firsts: Vec::with_capacity(count),
+            end: vec![0.0; 2 * p + 1],
+            index: PolylineIndex::new(vec![Vec3::ZERO; 2]).unwrap_or_else(|| unreachable!()),
+        };
+        let mut boundaries = Vec::with_capacity(count + 1);
+        let mut values = vec![0.0_f64; p + 1];
+        let mut samples = vec![vec![0.0_f64; p + 1]; p + 1];
+        for k in 0..count {
+            let span = k / per_span;
+            let (t0, h) = (k as f64 / count as f64, 1.0 / count as f64);
+            // The point basis at the nodes: samples[i][j] = N_{first+i}(t0 + h·node_j).
+            for (j, &u) in nodes.iter().enumerate() {
+                point_basis_f64(evaluator.basis(), n, spans, span, t0 + h * u, &mut values);
+                for i in 0..=p {
+                    samples[i][j] = values[i];
+                }
+            }
+            let basis: Vec<Vec<f64>> = samples
+                .iter()
+                .map(|s| snapped(power_form(&nodes, s)))
+                .collect();
+            // C(u) = Σᵢ Nᵢ(u) Pᵢ, coefficient by coefficient, in f64.
+            let first = match evaluator.basis() {
+                CurveBasis::Bezier => 0,
+                CurveBasis::BSpline { .. } => span,
+            };
+            let coeffs: Vec<[f64; 3]> = (0..=p)
+                .map(|j| {
+                    let mut a = [0.0_f64; 3];
+                    for (i, b) in basis.iter().enumerate() {
+                        let q = ctrl[first + i];
+                        a[0] += b[j] * f64::from(q.x);
+                        a[1] += b[j] * f64::from(q.y);
+                        a[2] += b[j] * f64::from(q.z);
+                    }
+                    a
+                })
+                .collect();
+            let vec3 = |a: [f64; 3]| Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32);
+            boundaries.push(vec3(coeffs[0]));
+            if k + 1 == count {
+                let end = coeffs
+                    .iter()
+                    .fold([0.0; 3], |s, a| [s[0] + a[0], s[1] + a[1], s[2] + a[2]]);
+                boundaries.push(vec3(end));
+            }
+            pieces.curve.extend(coeffs.iter().map(|&a| vec3(a)));
+            if p == 0 {
+                pieces.tangent.push(Vec3::ZERO);
+            }
+            for (j, a) in coeffs.iter().enumerate().skip(1) {
+                let c = j as f64;
+                pieces.tangent.push(vec3([c * a[0], c * a[1], c * a[2]]));
+            }
+            for b in &basis {
+                pieces.point_basis.extend(b.iter().map(|&c| c as f32));
+            }
+            // The segment basis: degree p − 1 over the n − 1 segments.
+            if p >= 1 {
+                let mut seg = vec![vec![0.0_f64; p]; p];
+                for (j, &u) in seg_nodes.iter().enumerate() {
+                    segment_basis_f64(evaluator.basis(), n, spans, span, t0 + h * u, &mut values);
+                    for i in 0..p {
+                        seg[i][j] = values[i];
+                    }
+                }
+                for s in &seg {
+                    let c = snapped(power_form(&seg_nodes, s));
+                    pieces.segment_basis.extend(c.iter().map(|&c| c as f32));
+                }
+            }
+            pieces.firsts.push(first as u32);
+        }
+        point_basis_f64(evaluator.basis(), n, spans, spans - 1, 1.0, &mut values);
+        for (e, v) in pieces.end.iter_mut().zip(&values) {
+            *e = *v as f32;
+        }
+        if p >= 1 {
+            segment_basis_f64(evaluator.basis(), n, spans, spans - 1, 1.0, &mut values);
+            for (e, v) in pieces.end[p + 1..].iter_mut().zip(&values) {
+                *e = *v as f32;
+            }
+        }
+        // At least two boundaries: the index always exists.
+        pieces.index = PolylineIndex::new(boundaries).unwrap_or_else(|| unreachable!());
+        pieces
+    }
+
+    /// Number of pieces `m`.
+    #[must_use]
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// The piece boundaries `C(k/m)`, `k = 0..=m`.
+    #[must_use]
+    pub fn boundaries(&self) -> &[Vec3] {
+        self.index.points()
+    }
+
+    /// `(C(u), dC/du)` on piece `k` by Horner's rule.
+    #[must_use]
+    pub fn point_and_tangent(&self, k: usize, u: f32) -> (Vec3, Vec3) {
+        let p = self.degree;
+        let a = &self.curve[k * (p + 1)..(k + 1) * (p + 1)];
+        let d = &self.tangent[k * p.max(1)..(k + 1) * p.max(1)];
+        (horner3(a, u), horner3(d, u))
+    }
+
+    /// The curve point at `u` of piece `k`.
+    #[must_use]
+    pub fn point(&self, k: usize, u: f32) -> Vec3 {
+        let p = self.degree;
+        horner3(&self.curve[k * (p + 1)..(k + 1) * (p + 1)], u)
+    }
+
+    /// The closest curve point to `x`: the closest point of the boundary polyline, refined by
+    /// Gauss–Newton steps kept only while they bring the point closer (module
+    /// documentation). Returns it and its squared distance.
+    #[must_use]
+    pub fn closest(&self, x: Vec3) -> (Closest, f32) {
+        let (k, u, _) = self.index.closest(x);
+        let (mut k, mut u) = self.settled(k, u);
+        let (mut c, mut dc) = self.point_and_tangent(k, u);
+        let mut best = c.distance_squared(x);
+        let last = self.count - 1;
+        for _ in 0..REFINE_STEPS {
+            let l2 = dc.length_squared();
+            if l2 <= f32::EPSILON * f32::EPSILON {
+                break;
+            }
+            // The step in this piece's parameter, then the piece it lands in.
+            let next = u - (c - x).dot(dc) / l2;
+            let (kn, un) = if next.is_nan() {
+                break;
+            } else if next < 0.0 {
+                let back = ((-next).ceil() as usize).min(k);
+                if back == 0 {
+                    (k, 0.0)
+                } else {
+                    (k - back, (next + back as f32).clamp(0.0, 1.0))
+                }
+            } else if next > 1.0 {
+                let ahead = ((next.floor()) as usize).min(last - k);
+                if ahead == 0 {
+                    (k, 1.0)
+                } else {
+                    (k + ahead, (next - ahead as f32).clamp(0.0, 1.0))
+                }
+            } else {
+                (k, next)
+            };
+            let (kn, un) = self.settled(kn, un);
+            let (cn, dn) = self.point_and_tangent(kn, un);
+            let d = cn.distance_squared(x);
+            if d < best {
+                (best, k, u, c, dc) = (d, kn, un, cn, dn);
+            } else {
+                break;
+            }
+        }
+        let t = ((k as f64 + f64::from(u)) / self.count as f64) as f32;
+        (
+            Closest {
+                piece: k,
+                u,
+                t,
+                point: c,
+            },
+            best,
+        )
+    }
+
+    /// `(k, u)` with the end of an inner piece written as the start of the next one, so that
+    /// a knot belongs to the span after it, as in [`crate::basis::KnotVector::span`].
+    #[inline]
+    fn settled(&self, k: usize, u: f32) -> (usize, f32) {
+        if u >= 1.0 && k + 1 < self.count {
+            (k + 1, 0.0)
+        } else {
+            (k, u)
+        }
+    }
+
+    /// The first non-zero point and segment function on piece `k` (the same index: the
+    /// B-spline's knot span minus the degree, or 0 for Bézier).
+    #[must_use]
+    pub fn first(&self, k: usize) -> usize {
+        self.firsts[k] as usize
+    }
+
+    /// The `p + 1` point basis values at `u` of piece `k`, then the `p` segment basis
+    /// values, written to `out[..2p + 1]`.
+    ///
+    /// # Panics
+    /// When `out` is shorter than `2p + 1`.
+    pub fn weights(&self, k: usize, u: f32, out: &mut [f32]) {
+        let p = self.degree;
+        if u >= 1.0 && k + 1 == self.count {
+            out[..=2 * p].copy_from_slice(&self.end);
+            return;
+        }
+        let pb = &self.point_basis[k * (p + 1) * (p + 1)..(k + 1) * (p + 1) * (p + 1)];
+        for (o, c) in out[..=p].iter_mut().zip(pb.chunks_exact(p + 1)) {
+            *o = horner(c, u);
+        }
+        if p >= 1 {
+            let sb = &self.segment_basis[k * p * p..(k + 1) * p * p];
+            for (o, c) in out[p + 1..=2 * p].iter_mut().zip(sb.chunks_exact(p)) {
+                *o = horner(c, u);
+            }
+        }
+    }
+}
+
+/// `Σⱼ cⱼ uʲ` by Horner's rule. Separate products and sums, not `mul_add`: the baseline
+/// x86-64 target has no fused multiply–add instruction, and `mul_add` becomes a call to a
+/// software `fmaf`.
+#[inline]
+fn horner(c: &[f32], u: f32) -> f32 {
+    c.iter().rev().fold(0.0, |acc, &a| acc * u + a)
+}
+
+/// `Σⱼ aⱼ uʲ` for vectors, by Horner's rule (separate products and sums, as [`horner`]).
+#[inline]
+fn horner3(a: &[Vec3], u: f32) -> Vec3 {
+    a.iter().rev().fold(Vec3::ZERO, |acc, &c| acc * u + c)
+}
+
+/// `n` Chebyshev nodes in `(0, 1)`: `½ − ½ cos((2j + 1)π / 2n)`.
+fn chebyshev_nodes(n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|j| 0.5 - 0.5 * ((2 * j + 1) as f64 * std::f64::consts::PI / (2 * n) as f64).cos())
+        .collect()
+}
+
+/// The power-form coefficients of the polynomial of degree `< nodes.len()` taking
+/// `values[j]` at `nodes[j]`: Newton's divided differences, then the Newton form expanded
+/// from its innermost factor.
+fn power_form(nodes: &[f64], values: &[f64]) -> Vec<f64> {
+    let d = nodes.len() - 1;
+    let mut c = values.to_vec();
+    for k in 1..=d {
+        for j in (k..=d).rev() {
+            c[j] = (c[j] - c[j - 1]) / (nodes[j] - nodes[j - k]);
+        }
+    }
+    // a(u) ← a(u)·(u − x_k) + c_k, from k = d − 1 down to 0.
+    let mut a = vec![0.0; d + 1];
+    a[0] = c[d];
+    for k in (0..d).rev() {
+        let r = d - 1 - k; // the degree of a before this step
+        a[r + 1] = a[r];
+        for j in (1..=r).rev() {
+            a[j] = a[j - 1] - nodes[k] * a[j];
+        }
+        a[0] = c[k] - nodes[k] * a[0];
+    }
+    a
+}
+
+/// Basis coefficients rounded to 0 below `1e-13`: a basis function (at most 1) that vanishes
+/// at a piece's start to some order has those coefficients exactly 0, so it is exactly 0
+/// there as the recurrence gives it (the interpolation leaves about `1e-17`); a true
+/// coefficient this small changes no value by an `f32` ulp.
+fn snapped(mut a: Vec<f64>) -> Vec<f64> {
+    for c in &mut a {
+        if c.abs() < 1e-13 {
+            *c = 0.0;
+        }
+    }
+    a
+}
+
+/// The `p + 1` non-zero point basis functions at `t` inside knot span `span` (of `spans`),
+/// in `f64`: Bernstein of degree `n − 1`, or the clamped uniform B-spline of degree `p`.
+fn point_basis_f64(
+    basis: CurveBasis,
+    n: usize,
+    spans: usize,
+    span: usize,
+    t: f64,
+    out: &mut [f64],
+) {
+    match basis {
+        CurveBasis::Bezier => bernstein_f64(n - 1, t, out),
+        CurveBasis::BSpline { degree } => bspline_f64(degree, n, spans, span, t, out),
+    }
+}
+
+/// The `p` non-zero segment basis functions at `t` inside knot span `span`, in `f64`:
+/// Bernstein of degree `n − 2`, or the clamped uniform B-spline of degree `p − 1` over the
+/// `n − 1` segments (the same interior knots).
+fn segment_basis_f64(
+    basis: CurveBasis,
+    n: usize,
+    spans: usize,
+    span: usize,
+    t: f64,
+    out: &mut [f64],
+) {
+    match basis {
+        CurveBasis::Bezier => bernstein_f64(n - 2, t, out),
+        CurveBasis::BSpline { degree } => bspline_f64(degree - 1, n - 1, spans, span, t, out),
+    }
+}
+
+/// All Bernstein polynomials of degree `n` at `t` (de Casteljau recurrence), in `f64`.
+fn bernstein_f64(n: usize, t: f64, out: &mut [f64]) {
+    let s = 1.0 - t;
+    out[0] = 1.0;
+    for j in 1..=n {
+        let mut saved = 0.0;
+        for k in 0..j {
+            let tmp = out[k];
+            out[k] = saved + s * tmp;
+            saved = t * tmp;
+        }
+        out[j] = saved;
+    }
+}
+
+/// The `p + 1` non-zero basis functions of the clamped uniform B-spline of degree `p` with
+/// `n` control points (`spans` knot spans) at `t` inside span `span` (Cox–de Boor, Piegl &
+/// Tiller A2.2), in `f64`. Degree 0 is the indicator of the span.
+fn bspline_f64(p: usize, n: usize, spans: usize, span: usize, t: f64, out: &mut [f64]) {
+    debug_assert_eq!(n - p, spans);
+    // Knot u_i: 0 for i ≤ p, (i − p)/spans inside, 1 for i ≥ n.
+    let knot = |i: usize| -> f64 {
+        if i <= p {
+            0.0
+        } else if i >= n {
+            1.0
+        } else {
+            (i - p) as f64 / spans as f64
+        }
+    };
+    let s = span + p; // u_s ≤ t < u_{s+1}
+    let mut left = [0.0_f64; 17];
+    let mut right = [0.0_f64; 17];
+    out[0] = 1.0;
+    for j in 1..=p {
+        left[j] = t - knot(s + 1 - j);
+        right[j] = knot(s + j) - t;
+        let mut saved = 0.0;
+        for r in 0..j {
+            let denom = right[r + 1] + left[j - r];
+            let tmp = if denom != 0.0 { out[r] / denom } else { 0.0 };
+            out[r] = saved + right[r + 1] * tmp;
+            saved = left[j - r] * tmp;
+        }
+        out[j] = saved;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn wiggle(n: usize) -> Vec<Vec3> {
+        (0..n)
+            .map(|i| {
+                let s = i as f32;
+                Vec3::new(s, (1.3 * s).sin() * 0.8, (0.7 * s).cos() * 0.5)
+            })
+            .collect()
+    }
+
+    fn bases() -> Vec<(CurveBasis, usize)> {
+        let mut b = vec![
+            (CurveBasis::Bezier, 2),
+            (CurveBasis::Bezier, 5),
+            (CurveBasis::Bezier, 16),
+        ];
+        for (p, n) in [
+            (1, 2),
+            (1, 7),
+            (2, 5),
+            (3, 5),
+            (3, 8),
+            (3, 40),
+            (5, 9),
+            (15, 16),
+        ] {
+            b.push((CurveBasis::BSpline { degree: p }, n));
+        }
+        b
+    }
+
+    #[test]
+    fn power_form_interpolates_a_known_polynomial() {
+        let nodes = chebyshev_nodes(4);
+        let f = |u: f64| 2.0 - 3.0 * u + 0.5 * u * u + 7.0 * u * u * u;
+        let values: Vec<f64> = nodes.iter().map(|&u| f(u)).collect();
+        let a = power_form(&nodes, &values);
+        for (got, want) in a.iter().zip([2.0, -3.0, 0.5, 7.0]) {
+            assert!((got - want).abs() < 1e-12, "{a:?}");
+        }
+    }
+
+    #[test]
+    fn pieces_match_the_evaluator_points_tangents_and_weights() {
+        for (basis, n) in bases() {
+            let ctrl = wiggle(n);
+            let ev = CurveEvaluator::new(basis, n, "test").unwrap();
+            let pieces = CurvePieces::new(&ev, &ctrl);
+            let p = ev.degree();
+            let m = pieces.count();
+            let mut w = vec![0.0; 2 * p + 1];
+            for k in 0..m {
+                // Interior parameters, and the two ends of the curve (an inner boundary may
+                // be a knot, which the evaluator gives to either side by its rounding).
+                let mut us = vec![0.3, 0.77];
+                if k == 0 {
+                    us.push(0.0);
+                }
+                if k + 1 == m {
+                    us.push(1.0);
+                }
+                for u in us {
+                    let t = ((k as f64 + f64::from(u)) / m as f64) as f32;
+                    let (c, d) = pieces.point_and_tangent(k, u);
+                    let (ce, de) = ev.point_and_derivative(&ctrl, t);
+                    assert!(
+                        c.distance(ce) < 2e-5 * n as f32,
+                        "{basis:?} {n}: C at piece {k} u {u}"
+                    );
+                    // dC/du = dC/dt · h.
+                    let de = de / m as f32;
+                    assert!(
+                        d.distance(de) < 1e-4 * de.length().max(1e-3),
+                        "{basis:?} {n}: C' at piece {k} u {u}: {d} vs {de}"
+                    );
+                    pieces.weights(k, u, &mut w);
+                    let (pw, sw) = (ev.point_weights(t), ev.segment_weights(t));
+                    assert_eq!(
+                        pieces.first(k),
+                        pw.first,
+                        "{basis:?} {n}: first at piece {k}"
+                    );
+                    assert_eq!(pieces.first(k), sw.first, "{basis:?} {n}: segment first");
+                    for i in 0..=p {
+                        assert!((w[i] - pw.values[i]).abs() < 2e-5, "{basis:?} {n}: N{i}");
+                    }
+                    for i in 0..p {
+                        assert!(
+                            (w[p + 1 + i] - sw.values[i]).abs() < 2e-5,
+                            "{basis:?} {n}: M{i}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// The least squared distance to 65 samples of every piece.
+    fn brute_force(pieces: &CurvePieces, x: Vec3) -> f32 {
+        let mut best = f32::INFINITY;
+        for k in 0..pieces.count() {
+            for s in 0..=64 {
+                let u = s as f32 / 64.0;
+                best = best.min(pieces.point(k, u).distance_squared(x));
+            }
+        }
+        best
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        #[test]
+        fn closest_is_as_close_as_dense_sampling(
+            which in 0usize..11,
+            x in -2.0f32..9.0, y in -3.0f32..3.0, z in -3.0f32..3.0,
+        ) {
+            let (basis, n) = bases()[which];
+            let ctrl = wiggle(n);
+            let ev = CurveEvaluator::new(basis, n, "test").unwrap();
+            let pieces = CurvePieces::new(&ev, &ctrl);
+            let q = Vec3::new(x * n as f32 / 8.0, y, z);
+            let (c, d2) = pieces.closest(q);
+            prop_assert!((c.point.distance_squared(q) - d2).abs() <= 1e-6 * d2.max(1.0));
+            let dense = brute_force(&pieces, q);
+            // Never farther than the dense samples (up to rounding and, where two parts of
+            // the curve are nearly as close, the sag of a piece's chord), and t agrees with
+            // the piece.
+            prop_assert!(d2.sqrt() <= dense.sqrt() + 2e-3, "{d2} vs {dense}");
+            let t = (c.piece as f32 + c.u) / pieces.count() as f32;
+            prop_assert!((t - c.t).abs() < 1e-6);
+        }
+    }
+}
