@@ -227,13 +227,25 @@ impl SampledAxis {
     /// interpolation.
     #[must_use]
     pub fn at(&self, j: usize, f: f32) -> (Vec3, Mat3) {
+        let (a, m, _, _) = self.at_with_parts(j, f);
+        (a, m)
+    }
+
+    /// [`SampledAxis::at`] with the parts of `M = (R W) S`: the rotation `R W` and the scale
+    /// `s` of `S = diag(1, s, s)`, so that `M⁻¹ = S⁻¹ (R W)ᵀ` needs no general inverse.
+    fn at_with_parts(&self, j: usize, f: f32) -> (Vec3, Mat3, Mat3, f32) {
         let a = self.points[j].lerp(self.points[j + 1], f);
         let r = self.rotations[j].slerp(self.rotations[j + 1], f);
         let q = self.twist[j] + (self.twist[j + 1] - self.twist[j]) * f;
         let s = self.scale[j] + (self.scale[j + 1] - self.scale[j]) * f;
-        let m = Mat3::from_quat(r * Quat::from_rotation_x(q))
-            * Mat3::from_diagonal(Vec3::new(1.0, s, s));
-        (a, m)
+        // No twist (the common case): `R W = R`, without the sine and cosine of 0.
+        let rw = if q == 0.0 {
+            Mat3::from_quat(r)
+        } else {
+            Mat3::from_quat(r * Quat::from_rotation_x(q))
+        };
+        let m = rw * Mat3::from_diagonal(Vec3::new(1.0, s, s));
+        (a, m, rw, s)
     }
 }
 
@@ -376,9 +388,10 @@ impl Deformer for AxialTool {
                 if w <= 0.0 {
                     return;
                 }
-                let (a, m) = rest.at(j, f);
+                let (a, m, rw, s) = rest.at_with_parts(j, f);
                 // M = R W S is a rotation times diag(1, s, s) with s > 0: M⁻¹ = S⁻¹ (R W)ᵀ.
-                let l = m.inverse() * (u - a);
+                let l = rw.transpose() * (u - a);
+                let l = Vec3::new(l.x, l.y / s, l.z / s);
                 *segment = j as u32;
                 *fraction = f;
                 *local = l;

@@ -180,17 +180,37 @@ fn project_on_segment(p: Vec3, d: Vec3, l2: f32, x: Vec3) -> (f32, f32) {
 /// Segments per block of a [`PolylineIndex`].
 const BLOCK: usize = 8;
 
+/// Blocks whose bounds a query computes at a time on the stack.
+const BOUND_BATCH: usize = 64;
+
+/// The segments of one block as structure of arrays, one lane per segment: start points,
+/// directions `p[s+1] − p[s]` and their squared lengths (lanes past the polyline's end
+/// repeat its last segment and are never chosen).
+#[derive(Debug, Clone, PartialEq)]
+struct BlockLanes {
+    p: [[f32; BLOCK]; 3],
+    d: [[f32; BLOCK]; 3],
+    l2: [f32; BLOCK],
+}
+
 /// A polyline with bounding boxes over blocks of consecutive segments, for fast repeated
 /// closest-point queries (the same answer as [`closest_on_polyline`]).
+///
+/// A query computes the bounds of all boxes, then projects onto the segments of the blocks
+/// that may hold a nearer point than the best so far. Both loops run over arrays of plain
+/// values (boxes and segments as structures of arrays) that the compiler turns into SIMD
+/// code on any target; each lane does exactly the operations of
+/// [`closest_on_polyline`], in the same order, so the answer has the same bits.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PolylineIndex {
     points: Vec<Vec3>,
-    /// Per segment: its direction `p[s+1] − p[s]` and that direction's squared length, as
-    /// [`closest_on_polyline`] computes them (kept so that a query does not again).
-    segments: Vec<(Vec3, f32)>,
-    /// Per block: first segment, one past the last segment, and the corners of the box
-    /// around its points (a tighter bound than a sphere for the long thin blocks of a curve).
-    blocks: Vec<(usize, usize, Vec3, Vec3)>,
+    /// Number of segments.
+    segments: usize,
+    /// The segments, [`BLOCK`] per block.
+    lanes: Vec<BlockLanes>,
+    /// The corners of each block's box, padded so that a segment point as rounded
+    /// (`p + d·f`) never lies outside: `lo.x, lo.y, lo.z, hi.x, hi.y, hi.z` per block.
+    boxes: [Vec<f32>; 6],
 }
 
 impl PolylineIndex {
@@ -201,31 +221,40 @@ impl PolylineIndex {
             return None;
         }
         let segments = points.len() - 1;
-        let blocks = (0..segments)
-            .step_by(BLOCK)
-            .map(|first| {
-                let end = (first + BLOCK).min(segments);
-                let span = &points[first..=end];
-                let (lo, hi) = span
-                    .iter()
-                    .fold((span[0], span[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-                // Padded so that a segment point as rounded (`p + d·f`) never lies outside.
-                let pad =
-                    (hi - lo).max_element() * 1e-4 + lo.abs().max(hi.abs()).max_element() * 1e-5;
-                (first, end, lo - Vec3::splat(pad), hi + Vec3::splat(pad))
-            })
-            .collect();
-        let segments = points
-            .windows(2)
-            .map(|w| {
-                let d = w[1] - w[0];
-                (d, d.length_squared())
-            })
-            .collect();
+        let mut boxes: [Vec<f32>; 6] = Default::default();
+        let mut lanes = Vec::with_capacity(segments.div_ceil(BLOCK));
+        for first in (0..segments).step_by(BLOCK) {
+            let end = (first + BLOCK).min(segments);
+            let span = &points[first..=end];
+            let (lo, hi) = span
+                .iter()
+                .fold((span[0], span[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+            let pad = (hi - lo).max_element() * 1e-4 + lo.abs().max(hi.abs()).max_element() * 1e-5;
+            let (lo, hi) = (lo - Vec3::splat(pad), hi + Vec3::splat(pad));
+            for (b, v) in boxes.iter_mut().zip([lo.x, lo.y, lo.z, hi.x, hi.y, hi.z]) {
+                b.push(v);
+            }
+            let mut block = BlockLanes {
+                p: [[0.0; BLOCK]; 3],
+                d: [[0.0; BLOCK]; 3],
+                l2: [0.0; BLOCK],
+            };
+            for i in 0..BLOCK {
+                let s = (first + i).min(segments - 1);
+                let (a, d) = (points[s], points[s + 1] - points[s]);
+                for c in 0..3 {
+                    block.p[c][i] = a[c];
+                    block.d[c][i] = d[c];
+                }
+                block.l2[i] = d.length_squared();
+            }
+            lanes.push(block);
+        }
         Some(Self {
             points,
             segments,
-            blocks,
+            lanes,
+            boxes,
         })
     }
 
@@ -240,46 +269,104 @@ impl PolylineIndex {
     /// skipped, starting from the block nearest to `x`.
     #[must_use]
     pub fn closest(&self, x: Vec3) -> (usize, f32, f32) {
-        // The squared distance from `x` to a block's box: no point of the block is nearer.
-        let bound = |b: &(usize, usize, Vec3, Vec3)| {
-            (b.2 - x).max(x - b.3).max(Vec3::ZERO).length_squared()
-        };
-        // Start with the first block of least bound, then search every block that may hold
-        // a nearer point. The answer is the least squared distance and, among equal ones,
-        // the earliest segment, whatever the order.
+        // The answer is the least squared distance and, among equal ones, the earliest
+        // segment, whatever the order in which blocks are searched: start with the first
+        // block of least bound, then search every block that may hold a nearer point.
+        let blocks = self.lanes.len();
+        let mut bounds = [0.0_f32; BOUND_BATCH];
         let mut start = (0, f32::INFINITY);
-        for (k, b) in self.blocks.iter().enumerate() {
-            let d = bound(b);
-            if d < start.1 {
-                start = (k, d);
+        for from in (0..blocks).step_by(BOUND_BATCH) {
+            let len = self.bounds(x, from, &mut bounds);
+            for (k, &d) in bounds[..len].iter().enumerate() {
+                if d < start.1 {
+                    start = (from + k, d);
+                }
             }
         }
-        let start = start.0;
-        let mut best = self.search(&self.blocks[start], x);
-        for (k, b) in self.blocks.iter().enumerate() {
-            if k == start {
-                continue;
-            }
-            if bound(b) <= best.2 {
-                let c = self.search(b, x);
-                // Ties go to the earlier segment, as in `closest_on_polyline`.
-                if c.2 < best.2 || (c.2 == best.2 && c.0 < best.0) {
-                    best = c;
+        let mut best = self.search(start.0, x);
+        for from in (0..blocks).step_by(BOUND_BATCH) {
+            // One batch's bounds are still on the stack when there is only one batch.
+            let len = if blocks <= BOUND_BATCH {
+                blocks
+            } else {
+                self.bounds(x, from, &mut bounds)
+            };
+            for (k, &d) in bounds[..len].iter().enumerate() {
+                let b = from + k;
+                if b != start.0 && d <= best.2 {
+                    let c = self.search(b, x);
+                    // Ties go to the earlier segment, as in `closest_on_polyline`.
+                    if c.2 < best.2 || (c.2 == best.2 && c.0 < best.0) {
+                        best = c;
+                    }
                 }
             }
         }
         best
     }
 
-    /// [`closest_on_polyline`] over the segments of block `b`, with their directions and
-    /// squared lengths taken from the index (the same values, so the same bits).
-    fn search(&self, b: &(usize, usize, Vec3, Vec3), x: Vec3) -> (usize, f32, f32) {
-        let mut best = (b.0, 0.0, f32::INFINITY);
-        let segments = self.segments[b.0..b.1].iter().zip(&self.points[b.0..b.1]);
-        for (s, (&(d, l2), &p)) in (b.0..).zip(segments) {
-            let (f, dist2) = project_on_segment(p, d, l2, x);
-            if dist2 < best.2 {
-                best = (s, f, dist2);
+    /// The squared distances from `x` to the boxes of blocks `from..` (at most
+    /// [`BOUND_BATCH`]), written to `out`; returns how many. No point of a block is nearer.
+    #[inline]
+    fn bounds(&self, x: Vec3, from: usize, out: &mut [f32; BOUND_BATCH]) -> usize {
+        let len = (self.lanes.len() - from).min(BOUND_BATCH);
+        let [lx, ly, lz, hx, hy, hz] = &self.boxes;
+        let (lx, ly, lz) = (
+            &lx[from..from + len],
+            &ly[from..from + len],
+            &lz[from..from + len],
+        );
+        let (hx, hy, hz) = (
+            &hx[from..from + len],
+            &hy[from..from + len],
+            &hz[from..from + len],
+        );
+        for k in 0..len {
+            let ex = (lx[k] - x.x).max(x.x - hx[k]).max(0.0);
+            let ey = (ly[k] - x.y).max(x.y - hy[k]).max(0.0);
+            let ez = (lz[k] - x.z).max(x.z - hz[k]).max(0.0);
+            out[k] = ex * ex + ey * ey + ez * ez;
+        }
+        len
+    }
+
+    /// [`closest_on_polyline`] over the segments of block `b`: every lane projected (the
+    /// operations of [`project_on_segment`]), then the first least distance.
+    fn search(&self, b: usize, x: Vec3) -> (usize, f32, f32) {
+        let block = &self.lanes[b];
+        let mut f = [0.0_f32; BLOCK];
+        let mut d2 = [0.0_f32; BLOCK];
+        for i in 0..BLOCK {
+            let (px, py, pz) = (block.p[0][i], block.p[1][i], block.p[2][i]);
+            let (dx, dy, dz) = (block.d[0][i], block.d[1][i], block.d[2][i]);
+            let l2 = block.l2[i];
+            let dot = (x.x - px) * dx + (x.y - py) * dy + (x.z - pz) * dz;
+            let q = dot / l2;
+            let fi = if l2 > 0.0 {
+                if q < 0.0 {
+                    0.0
+                } else if q > 1.0 {
+                    1.0
+                } else {
+                    q
+                }
+            } else {
+                0.0
+            };
+            let (ex, ey, ez) = (
+                (px + dx * fi) - x.x,
+                (py + dy * fi) - x.y,
+                (pz + dz * fi) - x.z,
+            );
+            f[i] = fi;
+            d2[i] = ex * ex + ey * ey + ez * ez;
+        }
+        let first = b * BLOCK;
+        let len = (self.segments - first).min(BLOCK);
+        let mut best = (first, 0.0, f32::INFINITY);
+        for i in 0..len {
+            if d2[i] < best.2 {
+                best = (first + i, f[i], d2[i]);
             }
         }
         best

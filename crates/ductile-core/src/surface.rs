@@ -444,7 +444,8 @@ impl Deformer for ShapeSurfaceTool {
         let size = self.frame.u_edge.length() + self.frame.v_edge.length();
         // A rest surface without rest edits is the frame's plane, `S(u, v) = O + u·U + v·V`
         // exactly (B-splines reproduce linear functions from the Greville abscissae): its
-        // closest point solves the 2×2 normal equations directly instead of a search.
+        // closest point solves the 2×2 normal equations directly instead of a search, and its
+        // point and derivatives there are `O + uU + vV`, `U` and `V`.
         let (o, eu, ev) = (self.frame.origin, self.frame.u_edge, self.frame.v_edge);
         let (a, b, c) = (eu.dot(eu), eu.dot(ev), ev.dot(ev));
         let det = a * c - b * b;
@@ -454,8 +455,8 @@ impl Deformer for ShapeSurfaceTool {
                 let (g1, g2) = (r.dot(eu), r.dot(ev));
                 let u = ((c * g1 - b * g2) / det).clamp(0.0, 1.0);
                 let v = ((a * g2 - b * g1) / det).clamp(0.0, 1.0);
-                let bs = bases(&knots, u, v);
-                (u, v, eval_net(&rest, n_u, pu, pv, &bs), bs)
+                // The point and the derivatives of the plane, without summing the net.
+                (u, v, [o + eu * u + ev * v, eu, ev], bases(&knots, u, v))
             } else {
                 let (u, v, s) = closest_point(&knots, &rest, &samples, x);
                 (u, v, s, bases(&knots, u, v))
