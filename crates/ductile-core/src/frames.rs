@@ -342,17 +342,7 @@ impl PolylineIndex {
             let l2 = block.l2[i];
             let dot = (x.x - px) * dx + (x.y - py) * dy + (x.z - pz) * dz;
             let q = dot / l2;
-            let fi = if l2 > 0.0 {
-                if q < 0.0 {
-                    0.0
-                } else if q > 1.0 {
-                    1.0
-                } else {
-                    q
-                }
-            } else {
-                0.0
-            };
+            let fi = if l2 > 0.0 { q.clamp(0.0, 1.0) } else { 0.0 };
             let (ex, ey, ez) = (
                 (px + dx * fi) - x.x,
                 (py + dy * fi) - x.y,
