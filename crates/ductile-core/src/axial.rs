@@ -19,7 +19,7 @@ use glam::{Affine3A, Mat3, Quat, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::chunks::{BIND_CHUNK, active_mask};
+use crate::chunks::{BIND_CHUNK, bind_slots};
 use crate::curve::{CurveBasis, CurveEvaluator, validate_polygon};
 use crate::error::{CoreError, Result, check_finite};
 use crate::frames::{Frame, PolylineIndex, double_reflection, polyline_tangents};
@@ -249,12 +249,14 @@ impl SampledAxis {
     }
 }
 
-/// Bind of an [`AxialTool`]: the sampled rest axis, and per welded vertex (indexed by vertex
-/// number) its sample segment, fraction, local coordinates `l`, the rest-state image
-/// `A_U + M₁ l` (≈ `U`) and the zone weight `w`.
+/// Bind of an [`AxialTool`]: the sampled rest axis; per bound (active) vertex, in the order of
+/// the active list, its sample segment, fraction, local coordinates `l`, the rest-state image
+/// `A_U + M₁ l` (≈ `U`) and the zone weight `w`; and per welded vertex its slot in those
+/// arrays (a layer limited to a small volume keeps only what its vertices need).
 #[derive(Debug, Clone)]
 pub struct AxialBind {
     rest: SampledAxis,
+    slot: Vec<u32>,
     segment: Vec<u32>,
     fraction: Vec<f32>,
     local: Vec<Vec3>,
@@ -263,10 +265,14 @@ pub struct AxialBind {
 }
 
 impl AxialBind {
-    /// Zone weight of welded vertex `i` (0 outside the cylinder).
+    /// Zone weight of welded vertex `i` (0 outside the cylinder or when it was not active).
     #[must_use]
     pub fn weight(&self, i: u32) -> f32 {
-        self.weight[i as usize]
+        self.slot
+            .get(i as usize)
+            .and_then(|&s| self.weight.get(s as usize))
+            .copied()
+            .unwrap_or(0.0)
     }
 
     /// The sampled rest axis.
@@ -352,13 +358,15 @@ impl Deformer for AxialTool {
 
     fn bind(&self, input: &BindInput<'_>) -> Result<AxialBind> {
         let rest = SampledAxis::new(self.shape, &self.rest, None, "axial tool: rest axis")?;
-        let n = input.positions.len();
+        let (slot, active) = bind_slots(input.positions.len(), input.active);
+        let m = active.len();
         let mut bind = AxialBind {
-            segment: vec![0; n],
-            fraction: vec![0.0; n],
-            local: vec![Vec3::ZERO; n],
-            base: vec![Vec3::ZERO; n],
-            weight: vec![0.0; n],
+            slot,
+            segment: vec![0; m],
+            fraction: vec![0.0; m],
+            local: vec![Vec3::ZERO; m],
+            base: vec![Vec3::ZERO; m],
+            weight: vec![0.0; m],
             rest,
         };
         let index =
@@ -368,7 +376,6 @@ impl Deformer for AxialTool {
             })?;
         let inv_r = 1.0 / self.radius;
         // Every vertex on its own, in parallel chunks (the same bits as one by one).
-        let mask = active_mask(n, input.active);
         let rest = &bind.rest;
         bind.segment
             .par_iter_mut()
@@ -376,13 +383,10 @@ impl Deformer for AxialTool {
             .zip(bind.local.par_iter_mut())
             .zip(bind.base.par_iter_mut())
             .zip(bind.weight.par_iter_mut())
-            .enumerate()
+            .zip(active.par_iter())
             .with_min_len(BIND_CHUNK)
-            .for_each(|(k, ((((segment, fraction), local), base), weight))| {
-                if !mask[k] {
-                    return;
-                }
-                let u = input.positions[k];
+            .for_each(|(((((segment, fraction), local), base), weight), &i)| {
+                let u = input.positions[i as usize];
                 let (j, f, d2) = index.closest(u);
                 let w = self.falloff.weight(d2.sqrt() * inv_r, self.inner);
                 if w <= 0.0 {
@@ -416,8 +420,13 @@ impl Deformer for AxialTool {
             return;
         };
         for (o, &i) in out.iter_mut().zip(active) {
-            let k = i as usize;
-            let u = positions[k];
+            let u = positions[i as usize];
+            // A vertex that was not active when the layer bound stays.
+            let Some(&k) = bind.slot.get(i as usize).filter(|&&s| s != u32::MAX) else {
+                *o = u;
+                continue;
+            };
+            let k = k as usize;
             let w = bind.weight[k];
             if w <= 0.0 {
                 *o = u;

@@ -21,16 +21,20 @@ pub const PARALLEL_COPY_THRESHOLD: usize = 1 << 17;
 /// shape surfaces).
 pub const BIND_CHUNK: usize = 4096;
 
-/// `mask[v]` is true for the active vertices of `n`.
+/// The slots of a compact per-vertex bind of `n` vertices: `slot[v]` is the position of
+/// vertex `v` in the bind's active list (`u32::MAX` for a vertex that is not active), with
+/// that list (the vertices of `active` below `n`, each once, in order).
 #[must_use]
-pub fn active_mask(n: usize, active: &[u32]) -> Vec<bool> {
-    let mut mask = vec![false; n];
+pub fn bind_slots(n: usize, active: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    let mut slot = vec![u32::MAX; n];
+    let mut list = Vec::with_capacity(active.len());
     for &i in active {
-        if let Some(m) = mask.get_mut(i as usize) {
-            *m = true;
+        if let Some(s) = slot.get_mut(i as usize).filter(|s| **s == u32::MAX) {
+            *s = list.len() as u32;
+            list.push(i);
         }
     }
-    mask
+    (slot, list)
 }
 
 /// Calls `f(k, &mut values[indices[k]])` for every `k`. When `indices` has at least
@@ -135,5 +139,17 @@ pub fn gather_at<T: Copy + Send + Sync>(values: &[T], indices: &[u32]) -> Vec<T>
             .collect()
     } else {
         indices.iter().map(|&i| values[i as usize]).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bind_slots_number_each_active_vertex_in_range_once() {
+        let (slot, list) = bind_slots(6, &[1, 4, 4, 9, 2]);
+        assert_eq!(list, [1, 4, 2]);
+        assert_eq!(slot, [u32::MAX, 0, 2, u32::MAX, 1, u32::MAX]);
     }
 }

@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all, bernstein_all_with_derivative};
-use crate::chunks::{BIND_CHUNK, active_mask};
+use crate::chunks::{BIND_CHUNK, bind_slots};
 use crate::curve_pieces::CurvePieces;
 use crate::error::{CoreError, Result, check_finite_vec3};
 use crate::frames::PolylineIndex;
@@ -325,25 +325,29 @@ impl CurveTool {
     }
 }
 
-/// Bind of a [`CurveTool`]: per welded vertex (indexed by vertex number; only active ones
-/// are meaningful) the rest parameter `t`, the offset `o = x − C_P(t)` and the non-zero
-/// basis functions at `t` (point basis, then segment basis: `2p + 1` values per vertex).
+/// Bind of a [`CurveTool`]: per bound (active) vertex, in the order of the active list, the
+/// rest parameter `t`, the offset `o = x − C_P(t)` and the non-zero basis functions at `t`
+/// (point basis, then segment basis: `2p + 1` values per vertex); and per welded vertex its
+/// slot in those arrays. A layer limited to a small volume of a big mesh keeps only what its
+/// vertices need (4 bytes per mesh vertex for the slots).
 #[derive(Debug, Clone)]
 pub struct CurveBind {
     evaluator: CurveEvaluator,
+    slot: Vec<u32>,
     params: Vec<f32>,
     offsets: Vec<Vec3>,
-    /// First point index and first segment index of the non-zero functions.
-    firsts: Vec<(u32, u32)>,
+    /// First point index (which is also the first segment index) of the non-zero functions.
+    firsts: Vec<u32>,
     /// `degree + 1` point weights then `degree` segment weights per vertex.
     weights: Vec<f32>,
 }
 
 impl CurveBind {
-    /// The bound rest parameter of welded vertex `i`.
+    /// The bound rest parameter of welded vertex `i` (`None` when it was not active).
     #[must_use]
-    pub fn parameter(&self, i: u32) -> f32 {
-        self.params[i as usize]
+    pub fn parameter(&self, i: u32) -> Option<f32> {
+        let s = *self.slot.get(i as usize)?;
+        self.params.get(s as usize).copied()
     }
 }
 
@@ -369,36 +373,32 @@ impl Deformer for CurveTool {
     fn bind(&self, input: &BindInput<'_>) -> Result<CurveBind> {
         let evaluator = CurveEvaluator::new(self.basis, self.rest.len(), "curve tool")?;
         let pieces = CurvePieces::new(&evaluator, &self.rest);
-        let n = input.positions.len();
-        let p = evaluator.degree();
-        let stride = 2 * p + 1;
-        let mut params = vec![0.0; n];
-        let mut offsets = vec![Vec3::ZERO; n];
-        let mut firsts = vec![(0, 0); n];
-        let mut weights = vec![0.0; n * stride];
+        let (slot, active) = bind_slots(input.positions.len(), input.active);
+        let m = active.len();
+        let stride = 2 * evaluator.degree() + 1;
+        let mut params = vec![0.0; m];
+        let mut offsets = vec![Vec3::ZERO; m];
+        let mut firsts = vec![0; m];
+        let mut weights = vec![0.0; m * stride];
         // Every vertex on its own, in parallel chunks (the same bits as one by one).
-        let mask = active_mask(n, input.active);
         params
             .par_iter_mut()
             .zip(offsets.par_iter_mut())
             .zip(firsts.par_iter_mut())
             .zip(weights.par_chunks_mut(stride))
-            .enumerate()
+            .zip(active.par_iter())
             .with_min_len(BIND_CHUNK)
-            .for_each(|(k, (((param, offset), first), weights))| {
-                if !mask[k] {
-                    return;
-                }
-                let x = input.positions[k];
+            .for_each(|((((param, offset), first), weights), &i)| {
+                let x = input.positions[i as usize];
                 let (c, _) = pieces.closest(x);
                 *param = c.t;
                 *offset = x - c.point;
-                let f = pieces.first(c.piece) as u32;
-                *first = (f, f);
+                *first = pieces.first(c.piece) as u32;
                 pieces.weights(c.piece, c.u, weights);
             });
         Ok(CurveBind {
             evaluator,
+            slot,
             params,
             offsets,
             firsts,
@@ -421,18 +421,23 @@ impl Deformer for CurveTool {
             .map(|r| r - Mat3::IDENTITY)
             .collect();
         for (o, &i) in out.iter_mut().zip(active) {
-            let v = i as usize;
-            let (fp, fs) = (bind.firsts[v].0 as usize, bind.firsts[v].1 as usize);
+            let Some(&v) = bind.slot.get(i as usize).filter(|&&s| s != u32::MAX) else {
+                // Not bound (not active when the layer bound): it stays.
+                *o = positions[i as usize];
+                continue;
+            };
+            let v = v as usize;
+            let f = bind.firsts[v] as usize;
             let w = &bind.weights[v * stride..(v + 1) * stride];
             let mut d = Vec3::ZERO;
             for k in 0..=p {
-                d += moves[fp + k] * w[k];
+                d += moves[f + k] * w[k];
             }
             let mut turn = Mat3::ZERO;
             for k in 0..p {
-                turn += turns[fs + k] * w[p + 1 + k];
+                turn += turns[f + k] * w[p + 1 + k];
             }
-            *o = positions[v] + d + turn * bind.offsets[v];
+            *o = positions[i as usize] + d + turn * bind.offsets[v];
         }
     }
 
@@ -630,6 +635,45 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn vertices_not_active_at_bind_stay_and_have_no_parameter() {
+        let pts = cloud();
+        let mut tool = CurveTool::new(CurveBasis::BSpline { degree: 3 }, straight(6, 3.0));
+        tool.deformed[3] += Vec3::new(0.0, 0.8, 0.0);
+        let topo = Topology {
+            weld: vec![],
+            representative: vec![],
+            triangles: vec![],
+        };
+        let every: Vec<u32> = (0..pts.len() as u32).collect();
+        let even: Vec<u32> = every.iter().copied().filter(|i| i % 2 == 0).collect();
+        let bind = |active: &[u32]| {
+            tool.bind(&BindInput {
+                positions: &pts,
+                topology: &topo,
+                active,
+            })
+            .unwrap()
+        };
+        let (all, half) = (bind(&every), bind(&even));
+        let (mut a, mut h) = (vec![Vec3::ZERO; pts.len()], vec![Vec3::ZERO; pts.len()]);
+        tool.deform(&all, &pts, &every, &mut a);
+        tool.deform(&half, &pts, &every, &mut h);
+        let mut moved = 0;
+        for (k, ((x, a), h)) in pts.iter().zip(&a).zip(&h).enumerate() {
+            if k % 2 == 0 {
+                // A compact bind gives a bound vertex the bits of a bind of every vertex.
+                assert_eq!(a, h);
+                assert_eq!(half.parameter(k as u32), all.parameter(k as u32));
+                moved += usize::from(a != x);
+            } else {
+                assert_eq!(h, x);
+                assert_eq!(half.parameter(k as u32), None);
+            }
+        }
+        assert!(moved > 20, "{moved}");
+    }
+
+    #[test]
     fn bspline_is_local_and_bezier_is_global() {
         let pts = cloud();
         let rest = straight(8, 3.0);
@@ -661,7 +705,7 @@ pub(crate) mod tests {
         tool.deform(&bind, &pts, &active, &mut out);
         let (mut inside_moved, mut outside) = (0, 0);
         for (k, (x, o)) in pts.iter().zip(&out).enumerate() {
-            let t = bind.parameter(k as u32);
+            let t = bind.parameter(k as u32).unwrap();
             if t <= lo || t >= hi {
                 assert_eq!(x, o, "t = {t} is outside [{lo}, {hi}) but moved");
                 outside += 1;

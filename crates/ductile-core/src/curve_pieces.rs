@@ -317,6 +317,98 @@ impl CurvePieces {
     }
 }
 
+/// The basis functions of a clamped uniform B-spline knot vector in power-form pieces (as a
+/// [`CurvePieces`] holds them): their values and derivatives by Horner's rule. The shape
+/// surface binds with one per parameter direction.
+#[derive(Debug, Clone)]
+pub struct BasisPieces {
+    /// The degree `p`.
+    degree: usize,
+    /// Number of pieces `m`.
+    count: usize,
+    /// Per piece, `p + 1` functions × `p + 1` coefficients.
+    coeffs: Vec<f32>,
+    /// Per piece, its first non-zero function.
+    firsts: Vec<u32>,
+    /// The `p + 1` values at `t = 1` exactly (every function but the last 0).
+    end: Vec<f32>,
+}
+
+impl BasisPieces {
+    /// The pieces of `knots` (clamped uniform, as [`KnotVector::clamped_uniform`] builds):
+    /// at least 16 per control point, every knot a piece boundary.
+    ///
+    /// [`KnotVector::clamped_uniform`]: crate::basis::KnotVector::clamped_uniform
+    #[must_use]
+    pub fn new(knots: &crate::basis::KnotVector) -> Self {
+        let (p, n) = (knots.degree(), knots.count());
+        let spans = n - p;
+        let per_span = (PIECES_PER_POINT * n).div_ceil(spans);
+        let count = spans * per_span;
+        let nodes = chebyshev_nodes(p + 1);
+        let mut values = vec![0.0_f64; p + 1];
+        let mut samples = vec![vec![0.0_f64; p + 1]; p + 1];
+        let mut coeffs = Vec::with_capacity(count * (p + 1) * (p + 1));
+        let mut firsts = Vec::with_capacity(count);
+        for k in 0..count {
+            let span = k / per_span;
+            let (t0, h) = (k as f64 / count as f64, 1.0 / count as f64);
+            for (j, &u) in nodes.iter().enumerate() {
+                bspline_f64(p, n, spans, span, t0 + h * u, &mut values);
+                for i in 0..=p {
+                    samples[i][j] = values[i];
+                }
+            }
+            for s in &samples {
+                coeffs.extend(snapped(power_form(&nodes, s)).iter().map(|&c| c as f32));
+            }
+            firsts.push(span as u32);
+        }
+        bspline_f64(p, n, spans, spans - 1, 1.0, &mut values);
+        Self {
+            degree: p,
+            count,
+            coeffs,
+            firsts,
+            end: values.iter().map(|&v| v as f32).collect(),
+        }
+    }
+
+    /// The `p + 1` non-zero functions at `t` (clamped to `[0, 1]`) and their derivatives
+    /// with respect to `t`, written to `values[..=p]` and `derivs[..=p]`; returns the index
+    /// of the first.
+    ///
+    /// # Panics
+    /// When `values` or `derivs` is shorter than `p + 1`.
+    pub fn values_and_derivatives(&self, t: f32, values: &mut [f32], derivs: &mut [f32]) -> usize {
+        let p = self.degree;
+        let t = t.clamp(0.0, 1.0);
+        let scaled = t * self.count as f32;
+        let k = (scaled as usize).min(self.count - 1);
+        let u = (scaled - k as f32).clamp(0.0, 1.0);
+        let c = &self.coeffs[k * (p + 1) * (p + 1)..(k + 1) * (p + 1) * (p + 1)];
+        let m = self.count as f32;
+        for ((v, d), a) in values[..=p]
+            .iter_mut()
+            .zip(derivs[..=p].iter_mut())
+            .zip(c.chunks_exact(p + 1))
+        {
+            // Horner for the value and its derivative together.
+            let (mut y, mut dy) = (0.0_f32, 0.0_f32);
+            for &aj in a.iter().rev() {
+                dy = dy * u + y;
+                y = y * u + aj;
+            }
+            *v = y;
+            *d = dy * m;
+        }
+        if t >= 1.0 {
+            values[..=p].copy_from_slice(&self.end);
+        }
+        self.firsts[k] as usize
+    }
+}
+
 /// `Σⱼ cⱼ uʲ` by Horner's rule. Separate products and sums, not `mul_add`: the baseline
 /// x86-64 target has no fused multiply–add instruction, and `mul_add` becomes a call to a
 /// software `fmaf`.
@@ -555,6 +647,62 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    #[test]
+    fn basis_pieces_match_the_recurrence() {
+        use crate::basis::KnotVector;
+        for (p, n) in [(1, 2), (2, 4), (3, 4), (3, 9), (5, 7), (15, 16)] {
+            let kv = KnotVector::clamped_uniform(p, n).unwrap();
+            let pieces = BasisPieces::new(&kv);
+            let (mut v, mut d) = ([0.0; 16], [0.0; 16]);
+            let (mut ve, mut de) = ([0.0; 16], [0.0; 16]);
+            for s in 0..=997 {
+                let t = s as f32 / 997.0;
+                let first = pieces.values_and_derivatives(t, &mut v, &mut d);
+                let span = kv.basis_with_derivative(t, &mut ve, &mut de);
+                // Near a knot the two may take the span on either side: compare the functions.
+                let mut full = [0.0_f32; 32];
+                let mut full_e = [0.0_f32; 32];
+                let (mut fd, mut fde) = ([0.0_f32; 32], [0.0_f32; 32]);
+                for i in 0..=p {
+                    full[first + i] = v[i];
+                    fd[first + i] = d[i];
+                    full_e[span - p + i] = ve[i];
+                    fde[span - p + i] = de[i];
+                }
+                let scale = (n - p) as f32 * p as f32;
+                for i in 0..n {
+                    assert!(
+                        (full[i] - full_e[i]).abs() < 2e-5,
+                        "p {p} n {n} t {t}: N{i}"
+                    );
+                    assert!(
+                        (fd[i] - fde[i]).abs() < 2e-4 * scale.max(1.0),
+                        "p {p} n {n} t {t}: N'{i} {} vs {}",
+                        fd[i],
+                        fde[i]
+                    );
+                }
+            }
+            // Exactly 1 and 0 at the ends.
+            let first = pieces.values_and_derivatives(0.0, &mut v, &mut d);
+            assert_eq!(
+                (first, &v[..=p]),
+                (
+                    0,
+                    &{
+                        let mut e = [0.0; 16];
+                        e[0] = 1.0;
+                        e
+                    }[..=p]
+                )
+            );
+            let first = pieces.values_and_derivatives(1.0, &mut v, &mut d);
+            assert_eq!(first, n - 1 - p);
+            assert_eq!(v[p], 1.0);
+            assert!(v[..p].iter().all(|&x| x == 0.0));
         }
     }
 

@@ -19,7 +19,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE};
-use crate::chunks::BIND_CHUNK;
+use crate::chunks::{BIND_CHUNK, bind_slots};
+use crate::curve_pieces::BasisPieces;
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
 use crate::tool::{BindInput, Deformer};
 
@@ -197,6 +198,21 @@ fn bases(kv: &[KnotVector; 2], u: f32, v: f32) -> Bases {
     b
 }
 
+/// [`bases`] from power-form pieces of the two knot vectors.
+fn piece_bases(pieces: &[BasisPieces; 2], u: f32, v: f32) -> Bases {
+    let mut b = Bases {
+        nu: [0.0; MAX_DEGREE + 1],
+        du: [0.0; MAX_DEGREE + 1],
+        nv: [0.0; MAX_DEGREE + 1],
+        dv: [0.0; MAX_DEGREE + 1],
+        su: 0,
+        sv: 0,
+    };
+    b.su = pieces[0].values_and_derivatives(u, &mut b.nu, &mut b.du);
+    b.sv = pieces[1].values_and_derivatives(v, &mut b.nv, &mut b.dv);
+    b
+}
+
 /// `(S, S_u, S_v)` of a control net at bases `b`.
 fn eval_net(net: &[Vec3], n_u: usize, pu: usize, pv: usize, b: &Bases) -> [Vec3; 3] {
     eval_weights(net, n_u, b.weights(pu, pv))
@@ -259,9 +275,6 @@ fn eval_weights(net: &[Vec3], n_u: usize, b: Weights<'_>) -> [Vec3; 3] {
     r
 }
 
-/// The bound points of a chunk of vertices (vertex, bound point) and their basis weights.
-type BoundChunk = (Vec<(u32, Bound)>, Vec<f32>);
-
 /// One bound point: its surface coordinates and what deform needs at them.
 #[derive(Debug, Clone, Copy)]
 struct Bound {
@@ -277,7 +290,8 @@ struct Bound {
     span: (u32, u32),
 }
 
-/// Bind of a [`ShapeSurfaceTool`]: `(u₁, u₂, u₃)` per active vertex.
+/// Bind of a [`ShapeSurfaceTool`]: `(u₁, u₂, u₃)` per active vertex, in the order of the
+/// active list, and per welded vertex its slot (`u32::MAX` where it does not project).
 #[derive(Debug, Clone)]
 pub struct SurfaceBind {
     knots: [KnotVector; 2],
@@ -449,6 +463,8 @@ impl Deformer for ShapeSurfaceTool {
         let (o, eu, ev) = (self.frame.origin, self.frame.u_edge, self.frame.v_edge);
         let (a, b, c) = (eu.dot(eu), eu.dot(ev), ev.dot(ev));
         let det = a * c - b * b;
+        // The bases kept per bound point, in power-form pieces (no knot search or division).
+        let pieces = [BasisPieces::new(&knots[0]), BasisPieces::new(&knots[1])];
         let project = |x: Vec3| -> Option<(Bound, Bases)> {
             let (u, v, s, bs) = if planar && det > 0.0 {
                 let r = x - o;
@@ -456,10 +472,15 @@ impl Deformer for ShapeSurfaceTool {
                 let u = ((c * g1 - b * g2) / det).clamp(0.0, 1.0);
                 let v = ((a * g2 - b * g1) / det).clamp(0.0, 1.0);
                 // The point and the derivatives of the plane, without summing the net.
-                (u, v, [o + eu * u + ev * v, eu, ev], bases(&knots, u, v))
+                (
+                    u,
+                    v,
+                    [o + eu * u + ev * v, eu, ev],
+                    piece_bases(&pieces, u, v),
+                )
             } else {
                 let (u, v, s) = closest_point(&knots, &rest, &samples, x);
-                (u, v, s, bases(&knots, u, v))
+                (u, v, s, piece_bases(&pieces, u, v))
             };
             let n = s[1].cross(s[2]);
             if n.length_squared().is_nan() || n.length_squared() <= 0.0 {
@@ -484,36 +505,42 @@ impl Deformer for ShapeSurfaceTool {
                 bs,
             ))
         };
-        // Chunks of vertices in parallel, each giving its bound points and their weights,
-        // then joined in order.
-        let parts: Vec<BoundChunk> = input
-            .active
-            .par_chunks(BIND_CHUNK)
-            .map(|chunk| {
-                let mut found = Vec::with_capacity(chunk.len());
-                let mut weights = Vec::new();
-                for &i in chunk {
-                    if let Some((b, bs)) = project(input.positions[i as usize]) {
-                        found.push((i, b));
-                        let w = bs.weights(pu, pv);
-                        for part in [w.nu, w.du, w.nv, w.dv] {
-                            weights.extend_from_slice(part);
-                        }
+        // Every active vertex on its own, in parallel chunks, into its slot; a vertex that
+        // does not project keeps an unused slot and is marked unbound after.
+        let (mut slot, active) = bind_slots(input.positions.len(), input.active);
+        let m = active.len();
+        let stride = 2 * (pu + 1) + 2 * (pv + 1);
+        let unbound = Bound {
+            uv: (0.0, 0.0),
+            u3: 0.0,
+            normal: Vec3::ZERO,
+            du: Vec3::ZERO,
+            dv: Vec3::ZERO,
+            span: (0, 0),
+        };
+        let mut points = vec![unbound; m];
+        let mut weights = vec![0.0; m * stride];
+        let mut projects = vec![false; m];
+        points
+            .par_iter_mut()
+            .zip(weights.par_chunks_mut(stride))
+            .zip(projects.par_iter_mut())
+            .zip(active.par_iter())
+            .with_min_len(BIND_CHUNK)
+            .for_each(|(((point, weights), projects), &i)| {
+                if let Some((b, bs)) = project(input.positions[i as usize]) {
+                    *point = b;
+                    *projects = true;
+                    let w = bs.weights(pu, pv);
+                    let mut at = 0;
+                    for part in [w.nu, w.du, w.nv, w.dv] {
+                        weights[at..at + part.len()].copy_from_slice(part);
+                        at += part.len();
                     }
                 }
-                (found, weights)
-            })
-            .collect();
-        let mut slot = vec![u32::MAX; input.positions.len()];
-        let total = parts.iter().map(|p| p.0.len()).sum();
-        let mut points = Vec::with_capacity(total);
-        let mut weights = Vec::with_capacity(total * (2 * (pu + 1) + 2 * (pv + 1)));
-        for (found, w) in parts {
-            for (i, b) in found {
-                slot[i as usize] = points.len() as u32;
-                points.push(b);
-            }
-            weights.extend(w);
+            });
+        for (&i, _) in active.iter().zip(&projects).filter(|(_, p)| !**p) {
+            slot[i as usize] = u32::MAX;
         }
         Ok(SurfaceBind {
             knots,
