@@ -1,12 +1,24 @@
-use ductile_cli::suite::{Fixtures, MIXED_NODE};
-use ductile_core::stack::LayerBinding;
+//! Per-layer profile of the standard suite's million-vertex mixed stack
+//! (`ductile_cli::suite`): for each layer in order, its active vertices and the time of its
+//! mask, its tool's bind and its deformation (without normals), then the totals.
+//!
+//! `cargo run --release -p ductile-cli --example layer_profile -- [THREADS]` (default 2).
+//! One evaluation, so the figures move by 10–20 % between runs; run it twice on a quiet
+//! machine. Where `ductile bench --suite` says how long, this says where.
+
+use std::sync::Arc;
 use std::time::Instant;
 
+use anyhow::Context;
+use ductile_cli::suite::{Fixtures, MIXED_NODE};
+use ductile_core::influence::Mask;
+use ductile_core::stack::LayerBinding;
+
 fn main() -> anyhow::Result<()> {
-    let threads: usize = std::env::args()
-        .nth(1)
-        .map(|s| s.parse().unwrap())
-        .unwrap_or(2);
+    let threads: usize = match std::env::args().nth(1) {
+        Some(s) => s.parse().context("THREADS must be a number")?,
+        None => 2,
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()?;
@@ -14,41 +26,43 @@ fn main() -> anyhow::Result<()> {
     let stack = doc.resolve_stack(MIXED_NODE, &rest)?;
     pool.install(|| -> anyhow::Result<()> {
         let mut positions = rest.welded_positions().to_vec();
-        let (mut tb, mut tm, mut td) = (0.0, 0.0, 0.0);
+        let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+        let mut totals = [0.0; 3];
+        println!(
+            "{:<32} {:>8} {:>8} {:>8} {:>8}",
+            "layer", "active", "mask ms", "bind ms", "deform ms"
+        );
         for layer in &stack.layers {
             let t0 = Instant::now();
             let mask = match &layer.influence {
                 Some(inf) => inf.mask(&positions),
-                None => ductile_core::influence::Mask::all(positions.len()),
+                None => Mask::all(positions.len()),
             };
             let t1 = Instant::now();
-            let n = mask.indices.len();
-            let b = LayerBinding::bind_masked(
+            let active = mask.indices.len();
+            let binding = LayerBinding::bind_masked(
                 &layer.tool,
-                std::sync::Arc::new(mask),
+                Arc::new(mask),
                 &positions,
                 rest.topology(),
             )?;
             let t2 = Instant::now();
-            b.apply(layer, &mut positions)?;
+            binding.apply(layer, &mut positions)?;
             let t3 = Instant::now();
-            let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
-            tm += ms(t0, t1);
-            tb += ms(t1, t2);
-            td += ms(t2, t3);
+            let times = [ms(t0, t1), ms(t1, t2), ms(t2, t3)];
+            for (t, x) in totals.iter_mut().zip(times) {
+                *t += x;
+            }
+            let name = format!("{} ({})", layer.name, layer.tool.kind_name());
             println!(
-                "{:>30} active {:>8} mask {:7.2} bind {:7.2} deform {:7.2}",
-                format!("{:?}", std::mem::discriminant(&layer.tool))
-                    .chars()
-                    .take(30)
-                    .collect::<String>(),
-                n,
-                ms(t0, t1),
-                ms(t1, t2),
-                ms(t2, t3)
+                "{name:<32} {active:>8} {:>8.2} {:>8.2} {:>8.2}",
+                times[0], times[1], times[2]
             );
         }
-        println!("total mask {tm:.1} bind {tb:.1} deform {td:.1}");
+        println!(
+            "{:<32} {:>8} {:>8.1} {:>8.1} {:>8.1}",
+            "total", "", totals[0], totals[1], totals[2]
+        );
         Ok(())
     })
 }
