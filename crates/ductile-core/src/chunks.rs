@@ -27,6 +27,12 @@ pub const BIND_CHUNK: usize = 4096;
 #[must_use]
 pub fn bind_slots(n: usize, active: &[u32]) -> (Vec<u32>, Vec<u32>) {
     let mut slot = vec![u32::MAX; n];
+    // A mask's indices (strictly ascending, in range) are the list itself; their slots are
+    // written in parallel chunks.
+    if active.windows(2).all(|w| w[0] < w[1]) && active.last().is_none_or(|&i| (i as usize) < n) {
+        for_each_at(&mut slot, active, |k, s| *s = k as u32);
+        return (slot, active.to_vec());
+    }
     let mut list = Vec::with_capacity(active.len());
     for &i in active {
         if let Some(s) = slot.get_mut(i as usize).filter(|s| **s == u32::MAX) {
@@ -151,5 +157,16 @@ mod tests {
         let (slot, list) = bind_slots(6, &[1, 4, 4, 9, 2]);
         assert_eq!(list, [1, 4, 2]);
         assert_eq!(slot, [u32::MAX, 0, 2, u32::MAX, 1, u32::MAX]);
+        // An ascending list (a mask's), long enough to go parallel.
+        let n = 3 * PARALLEL_COPY_THRESHOLD;
+        let active: Vec<u32> = (0..n as u32).filter(|i| i % 3 != 1).collect();
+        let (slot, list) = bind_slots(n, &active);
+        assert_eq!(list, active);
+        for (v, &s) in slot.iter().enumerate() {
+            match active.binary_search(&(v as u32)) {
+                Ok(k) => assert_eq!(s, k as u32),
+                Err(_) => assert_eq!(s, u32::MAX),
+            }
+        }
     }
 }
