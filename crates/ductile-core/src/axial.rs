@@ -235,7 +235,10 @@ impl SampledAxis {
     /// `s` of `S = diag(1, s, s)`, so that `M⁻¹ = S⁻¹ (R W)ᵀ` needs no general inverse.
     fn at_with_parts(&self, j: usize, f: f32) -> (Vec3, Mat3, Mat3, f32) {
         let a = self.points[j].lerp(self.points[j + 1], f);
-        let r = self.rotations[j].slerp(self.rotations[j + 1], f);
+        // Between equal frames (a straight stretch of axis) the frame itself, without the
+        // spherical interpolation's arc cosine and sines.
+        let (r0, r1) = (self.rotations[j], self.rotations[j + 1]);
+        let r = if r0 == r1 { r0 } else { r0.slerp(r1, f) };
         let q = self.twist[j] + (self.twist[j + 1] - self.twist[j]) * f;
         let s = self.scale[j] + (self.scale[j + 1] - self.scale[j]) * f;
         // No twist (the common case): `R W = R`, without the sine and cosine of 0.
