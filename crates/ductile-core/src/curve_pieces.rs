@@ -13,8 +13,9 @@
 //!
 //! are evaluated by Horner's rule: a handful of fused operations instead of a knot search and
 //! the divisions of the Cox–de Boor recurrence. The coefficients are computed once per curve
-//! in `f64` — each function is evaluated in `f64` at `p + 1` Chebyshev nodes of the piece and
-//! interpolated (Newton's divided differences, expanded to powers) — then rounded to `f32`.
+//! in `f64` — each function is evaluated in `f64` at `p + 1` evenly spaced nodes of the piece
+//! and interpolated (Newton's divided differences, expanded to powers) — then rounded to
+//! `f32`.
 //! A piece is short (`h ≤ 1/32`), so its coefficients fall off like `hʲ/j!` and the power
 //! form is well conditioned even at degree 15.
 //!
@@ -31,6 +32,18 @@ use crate::frames::PolylineIndex;
 /// Pieces per control point (at least; a B-spline rounds up to whole knot spans).
 const PIECES_PER_POINT: usize = 16;
 
+/// The most coefficients (`f32`) a piece table is meant to hold, 16 MiB: a B-spline of many
+/// control points and a high degree gets fewer pieces per knot span (at least 2, which
+/// keeps a degree-15 power form well conditioned at the clamped ends).
+const TABLE_BUDGET: usize = 1 << 22;
+
+/// Pieces per knot span: [`PIECES_PER_POINT`] per control point, fewer where the table of
+/// `floats` coefficients per piece would pass [`TABLE_BUDGET`], and never fewer than 2.
+fn pieces_per_span(count: usize, spans: usize, floats: usize) -> usize {
+    let wanted = (PIECES_PER_POINT * count).div_ceil(spans);
+    wanted.min(TABLE_BUDGET / (spans * floats)).max(2)
+}
+
 /// Gauss–Newton refinements of a closest-point parameter.
 const REFINE_STEPS: usize = 4;
 
@@ -41,7 +54,9 @@ pub struct Closest {
     pub piece: usize,
     /// Its local parameter `u ∈ [0, 1]` in the piece.
     pub u: f32,
-    /// Its curve parameter `t = (piece + u) / m ∈ [0, 1]`.
+    /// Its curve parameter `t = (piece + u) / m ∈ [0, 1]`, rounded to `f32`: next to a
+    /// knot it may round onto the knot while the piece (whose weights a bind keeps) is the
+    /// one before it.
     pub t: f32,
     /// The curve point `C(t)`.
     pub point: Vec3,
@@ -91,10 +106,10 @@ impl CurvePieces {
             CurveBasis::Bezier => 1,
             CurveBasis::BSpline { .. } => n - p,
         };
-        let per_span = (PIECES_PER_POINT * n).div_ceil(spans);
+        let per_span = pieces_per_span(n, spans, (p + 1) * (p + 1) + p * p + 6 * (p + 1));
         let count = spans * per_span;
-        let nodes = chebyshev_nodes(p + 1);
-        let seg_nodes = chebyshev_nodes(p.max(1));
+        let nodes = interpolation_nodes(p + 1);
+        let seg_nodes = interpolation_nodes(p.max(1));
         let mut pieces = Self {
             degree: p,
             count,
@@ -229,8 +244,10 @@ impl CurvePieces {
         let mut best = c.distance_squared(x);
         let last = self.count - 1;
         for _ in 0..REFINE_STEPS {
+            // `dC/du = h·dC/dt` is small on short pieces: only a zero (or non-finite)
+            // tangent stops the steps; a step that overshoots is refused below.
             let l2 = dc.length_squared();
-            if l2 <= f32::EPSILON * f32::EPSILON {
+            if !(l2 > 0.0 && l2.is_finite()) {
                 break;
             }
             // The step in this piece's parameter, then the piece it lands in.
@@ -336,16 +353,22 @@ pub struct BasisPieces {
 
 impl BasisPieces {
     /// The pieces of `knots` (clamped uniform, as [`KnotVector::clamped_uniform`] builds):
-    /// at least 16 per control point, every knot a piece boundary.
+    /// 16 per control point, every knot a piece boundary, fewer per span on a long knot
+    /// vector. `None` when even 2 pieces per span would pass the table budget (16 MiB;
+    /// thousands of control points at a high degree): the caller evaluates the recurrence.
     ///
     /// [`KnotVector::clamped_uniform`]: crate::basis::KnotVector::clamped_uniform
     #[must_use]
-    pub fn new(knots: &crate::basis::KnotVector) -> Self {
+    pub fn new(knots: &crate::basis::KnotVector) -> Option<Self> {
         let (p, n) = (knots.degree(), knots.count());
         let spans = n - p;
-        let per_span = (PIECES_PER_POINT * n).div_ceil(spans);
+        let floats = (p + 1) * (p + 1);
+        if spans * 2 * floats > TABLE_BUDGET {
+            return None;
+        }
+        let per_span = pieces_per_span(n, spans, floats);
         let count = spans * per_span;
-        let nodes = chebyshev_nodes(p + 1);
+        let nodes = interpolation_nodes(p + 1);
         let mut values = vec![0.0_f64; p + 1];
         let mut samples = vec![vec![0.0_f64; p + 1]; p + 1];
         let mut coeffs = Vec::with_capacity(count * (p + 1) * (p + 1));
@@ -365,13 +388,13 @@ impl BasisPieces {
             firsts.push(span as u32);
         }
         bspline_f64(p, n, spans, spans - 1, 1.0, &mut values);
-        Self {
+        Some(Self {
             degree: p,
             count,
             coeffs,
             firsts,
             end: values.iter().map(|&v| v as f32).collect(),
-        }
+        })
     }
 
     /// The `p + 1` non-zero functions at `t` (clamped to `[0, 1]`) and their derivatives
@@ -386,6 +409,13 @@ impl BasisPieces {
         let scaled = t * self.count as f32;
         let k = (scaled as usize).min(self.count - 1);
         let u = (scaled - k as f32).clamp(0.0, 1.0);
+        // The end of an inner piece is the start of the next (a knot belongs to the span
+        // after it, as in `KnotVector::span`).
+        let (k, u) = if u >= 1.0 && k + 1 < self.count {
+            (k + 1, 0.0)
+        } else {
+            (k, u)
+        };
         let c = &self.coeffs[k * (p + 1) * (p + 1)..(k + 1) * (p + 1) * (p + 1)];
         let m = self.count as f32;
         for ((v, d), a) in values[..=p]
@@ -423,10 +453,13 @@ fn horner3(a: &[Vec3], u: f32) -> Vec3 {
     a.iter().rev().fold(Vec3::ZERO, |acc, &c| acc * u + c)
 }
 
-/// `n` Chebyshev nodes in `(0, 1)`: `½ − ½ cos((2j + 1)π / 2n)`.
-fn chebyshev_nodes(n: usize) -> Vec<f64> {
+/// `n` evenly spaced nodes in `(0, 1)`: `(2j + 1) / 2n`. Only additions, products and
+/// divisions reach the coefficients, so every platform computes the same bits (a cosine for
+/// Chebyshev nodes would depend on the platform's `libm`). At degree 15 even spacing
+/// magnifies the `f64` rounding by at most a few thousand — far below an `f32` ulp.
+fn interpolation_nodes(n: usize) -> Vec<f64> {
     (0..n)
-        .map(|j| 0.5 - 0.5 * ((2 * j + 1) as f64 * std::f64::consts::PI / (2 * n) as f64).cos())
+        .map(|j| (2 * j + 1) as f64 / (2 * n) as f64)
         .collect()
 }
 
@@ -457,8 +490,10 @@ fn power_form(nodes: &[f64], values: &[f64]) -> Vec<f64> {
 
 /// Basis coefficients rounded to 0 below `1e-13`: a basis function (at most 1) that vanishes
 /// at a piece's start to some order has those coefficients exactly 0, so it is exactly 0
-/// there as the recurrence gives it (the interpolation leaves about `1e-17`); a true
-/// coefficient this small changes no value by an `f32` ulp.
+/// there as the recurrence gives it (the interpolation leaves about `1e-17`). The rounding
+/// moves a value by at most `(p + 1)·1e-13` absolute: nothing next to the values near 1 that
+/// move a vertex, though a degree-15 function in the first pieces of its support (true values
+/// of `1e-26` and less) becomes exactly 0.
 fn snapped(mut a: Vec<f64>) -> Vec<f64> {
     for c in &mut a {
         if c.abs() < 1e-13 {
@@ -586,7 +621,7 @@ mod tests {
 
     #[test]
     fn power_form_interpolates_a_known_polynomial() {
-        let nodes = chebyshev_nodes(4);
+        let nodes = interpolation_nodes(4);
         let f = |u: f64| 2.0 - 3.0 * u + 0.5 * u * u + 7.0 * u * u * u;
         let values: Vec<f64> = nodes.iter().map(|&u| f(u)).collect();
         let a = power_form(&nodes, &values);
@@ -655,7 +690,7 @@ mod tests {
         use crate::basis::KnotVector;
         for (p, n) in [(1, 2), (2, 4), (3, 4), (3, 9), (5, 7), (15, 16)] {
             let kv = KnotVector::clamped_uniform(p, n).unwrap();
-            let pieces = BasisPieces::new(&kv);
+            let pieces = BasisPieces::new(&kv).unwrap();
             let (mut v, mut d) = ([0.0; 16], [0.0; 16]);
             let (mut ve, mut de) = ([0.0; 16], [0.0; 16]);
             for s in 0..=997 {
@@ -704,6 +739,41 @@ mod tests {
             assert_eq!(v[p], 1.0);
             assert!(v[..p].iter().all(|&x| x == 0.0));
         }
+    }
+
+    #[test]
+    fn long_high_degree_knot_vectors_keep_their_tables_small() {
+        use crate::basis::KnotVector;
+        // A curve at the limits: 4096 points of degree 15 gets 2 pieces per span.
+        let n = crate::curve::MAX_CURVE_POINTS;
+        let ctrl: Vec<Vec3> = (0..n)
+            .map(|i| Vec3::new(i as f32 * 0.01, (i as f32 * 0.05).sin(), 0.0))
+            .collect();
+        let ev = CurveEvaluator::new(CurveBasis::BSpline { degree: 15 }, n, "test").unwrap();
+        let pieces = CurvePieces::new(&ev, &ctrl);
+        assert_eq!(pieces.count(), 2 * (n - 15));
+        let floats = pieces.point_basis.len() + pieces.segment_basis.len();
+        assert!(floats * 4 < 40 << 20, "{floats} coefficients");
+        for k in 0..50 {
+            let q = Vec3::new(k as f32 * 0.8, 0.3, 0.1);
+            let (c, d2) = pieces.closest(q);
+            assert!(d2.sqrt() <= brute_force_near(&pieces, c.piece, q).sqrt() + 1e-4);
+        }
+        // A basis too long for a table leaves it to the recurrence.
+        let kv = KnotVector::clamped_uniform(15, 32_768).unwrap();
+        assert!(BasisPieces::new(&kv).is_none());
+        assert!(BasisPieces::new(&KnotVector::clamped_uniform(3, 4096).unwrap()).is_some());
+    }
+
+    /// The least squared distance to 65 samples of each piece within 40 of piece `k`.
+    fn brute_force_near(pieces: &CurvePieces, k: usize, x: Vec3) -> f32 {
+        let mut best = f32::INFINITY;
+        for j in k.saturating_sub(40)..(k + 40).min(pieces.count()) {
+            for s in 0..=64 {
+                best = best.min(pieces.point(j, s as f32 / 64.0).distance_squared(x));
+            }
+        }
+        best
     }
 
     /// The least squared distance to 65 samples of every piece.

@@ -300,6 +300,24 @@ impl Volume {
     }
 }
 
+/// The vertices `ids` (in range of `positions`) of positive `weight`, in order, with their
+/// weights. Generic over the iterator, so the loop compiles without a call per vertex.
+fn gather(
+    ids: impl Iterator<Item = u32>,
+    positions: &[Vec3],
+    weight: &impl Fn(Vec3) -> f32,
+) -> Mask {
+    let mut mask = Mask::default();
+    for i in ids {
+        let w = weight(positions[i as usize]);
+        if w > 0.0 {
+            mask.indices.push(i);
+            mask.weights.push(w);
+        }
+    }
+    mask
+}
+
 /// A layer's influence, resolved to mesh space and welded vertex indices.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Influence {
@@ -398,56 +416,55 @@ impl Influence {
                 outside
             }
         };
-        let gather = |ids: &mut dyn Iterator<Item = u32>, mask: &mut Mask| {
-            for i in ids {
-                let w = weight(positions[i as usize]);
-                if w > 0.0 {
-                    mask.indices.push(i);
-                    mask.weights.push(w);
-                }
-            }
-        };
         let candidates = area.map_or(n, <[u32]>::len);
         if candidates < PARALLEL_THRESHOLD {
-            let mut mask = Mask::default();
-            match area {
+            return match area {
                 Some(area) => gather(
-                    &mut area.iter().copied().filter(|&i| (i as usize) < n),
-                    &mut mask,
+                    area.iter().copied().filter(|&i| (i as usize) < n),
+                    positions,
+                    &weight,
                 ),
-                None => gather(&mut (0..n as u32), &mut mask),
-            }
-            return mask;
+                None => gather(0..n as u32, positions, &weight),
+            };
         }
-        // Chunks in parallel, each gathering its own part in order, then joined in order.
+        // Chunks in parallel, each gathering its own part in order, then copied in order
+        // into the mask (in parallel too).
         let parts: Vec<Mask> = match area {
             Some(area) => area
                 .par_chunks(CHUNK)
                 .map(|c| {
-                    let mut m = Mask::default();
-                    gather(&mut c.iter().copied().filter(|&i| (i as usize) < n), &mut m);
-                    m
+                    gather(
+                        c.iter().copied().filter(|&i| (i as usize) < n),
+                        positions,
+                        &weight,
+                    )
                 })
                 .collect(),
             None => (0..n.div_ceil(CHUNK))
                 .into_par_iter()
                 .map(|c| {
-                    let mut m = Mask::default();
                     let end = ((c + 1) * CHUNK).min(n);
-                    gather(&mut ((c * CHUNK) as u32..end as u32), &mut m);
-                    m
+                    gather((c * CHUNK) as u32..end as u32, positions, &weight)
                 })
                 .collect(),
         };
         let len = parts.iter().map(Mask::len).sum();
         let mut mask = Mask {
-            indices: Vec::with_capacity(len),
-            weights: Vec::with_capacity(len),
+            indices: vec![0; len],
+            weights: vec![0.0; len],
         };
-        for p in parts {
-            mask.indices.extend_from_slice(&p.indices);
-            mask.weights.extend_from_slice(&p.weights);
+        let mut jobs = Vec::with_capacity(parts.len());
+        let (mut indices, mut weights) = (&mut mask.indices[..], &mut mask.weights[..]);
+        for p in &parts {
+            let (i, rest_i) = std::mem::take(&mut indices).split_at_mut(p.len());
+            let (w, rest_w) = std::mem::take(&mut weights).split_at_mut(p.len());
+            jobs.push((i, w, p));
+            (indices, weights) = (rest_i, rest_w);
         }
+        jobs.into_par_iter().for_each(|(i, w, p)| {
+            i.copy_from_slice(&p.indices);
+            w.copy_from_slice(&p.weights);
+        });
         mask
     }
 

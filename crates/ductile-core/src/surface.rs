@@ -198,8 +198,9 @@ fn bases(kv: &[KnotVector; 2], u: f32, v: f32) -> Bases {
     b
 }
 
-/// [`bases`] from power-form pieces of the two knot vectors.
-fn piece_bases(pieces: &[BasisPieces; 2], u: f32, v: f32) -> Bases {
+/// [`bases`] from power-form pieces of the two knot vectors (or the recurrence of a knot
+/// vector too long for a piece table).
+fn piece_bases(pieces: &[Option<BasisPieces>; 2], kv: &[KnotVector; 2], u: f32, v: f32) -> Bases {
     let mut b = Bases {
         nu: [0.0; MAX_DEGREE + 1],
         du: [0.0; MAX_DEGREE + 1],
@@ -208,8 +209,12 @@ fn piece_bases(pieces: &[BasisPieces; 2], u: f32, v: f32) -> Bases {
         su: 0,
         sv: 0,
     };
-    b.su = pieces[0].values_and_derivatives(u, &mut b.nu, &mut b.du);
-    b.sv = pieces[1].values_and_derivatives(v, &mut b.nv, &mut b.dv);
+    let one = |k: usize, t: f32, values: &mut [f32], derivs: &mut [f32]| match &pieces[k] {
+        Some(p) => p.values_and_derivatives(t, values, derivs),
+        None => kv[k].basis_with_derivative(t, values, derivs) - kv[k].degree(),
+    };
+    b.su = one(0, u, &mut b.nu, &mut b.du);
+    b.sv = one(1, v, &mut b.nv, &mut b.dv);
     b
 }
 
@@ -282,8 +287,8 @@ struct Bound {
     u3: f32,
     /// Rest unit normal `N(u₁, u₂)`.
     normal: Vec3,
-    /// The rest surface's partial derivatives `S_u`, `S_v` at `(u₁, u₂)` (the very values
-    /// deform would compute again).
+    /// The rest surface's partial derivatives `S_u`, `S_v` at `(u₁, u₂)` (of a planar rest
+    /// surface, its frame's edges `U`, `V`): deform adds the moved net's derivatives to them.
     du: Vec3,
     dv: Vec3,
     /// The first non-zero basis function in u and v (the knot spans minus the degrees).
@@ -476,11 +481,11 @@ impl Deformer for ShapeSurfaceTool {
                     u,
                     v,
                     [o + eu * u + ev * v, eu, ev],
-                    piece_bases(&pieces, u, v),
+                    piece_bases(&pieces, &knots, u, v),
                 )
             } else {
                 let (u, v, s) = closest_point(&knots, &rest, &samples, x);
-                (u, v, s, piece_bases(&pieces, u, v))
+                (u, v, s, piece_bases(&pieces, &knots, u, v))
             };
             let n = s[1].cross(s[2]);
             if n.length_squared().is_nan() || n.length_squared() <= 0.0 {
