@@ -2,17 +2,43 @@
 //! polynomials and B-spline basis functions over clamped uniform knot vectors (Piegl &
 //! Tiller, *The NURBS Book*, algorithms A2.1–A2.3).
 
+use std::ops::{Add, Div, Mul, Sub};
+
+/// `f32` or `f64`: the recurrences below run in either (the tools evaluate in `f32`; the
+/// power-form pieces of [`crate::curve_pieces`] build their coefficients in `f64`).
+pub trait Real:
+    Copy
+    + PartialOrd
+    + From<u8>
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+{
+}
+
+impl<T> Real for T where
+    T: Copy
+        + PartialOrd
+        + From<u8>
+        + Add<Output = T>
+        + Sub<Output = T>
+        + Mul<Output = T>
+        + Div<Output = T>
+{
+}
+
 /// All Bernstein polynomials of degree `n` at `t`: `B_i^n(t) = C(n, i) tⁱ (1 − t)ⁿ⁻ⁱ`,
 /// `i = 0..=n`, written to `out[..=n]`. Computed by the de Casteljau recurrence
 /// `B_i^n = (1 − t) B_i^{n−1} + t B_{i−1}^{n−1}`, which is stable for `t ∈ [0, 1]`.
 ///
 /// # Panics
 /// When `out.len() <= n`.
-pub fn bernstein_all(n: usize, t: f32, out: &mut [f32]) {
-    let s = 1.0 - t;
-    out[0] = 1.0;
+pub fn bernstein_all<T: Real>(n: usize, t: T, out: &mut [T]) {
+    let s = T::from(1) - t;
+    out[0] = T::from(1);
     for j in 1..=n {
-        let mut saved = 0.0;
+        let mut saved = T::from(0);
         for k in 0..j {
             let tmp = out[k];
             out[k] = saved + s * tmp;
@@ -186,20 +212,28 @@ impl KnotVector {
     }
 }
 
-/// The Cox–de Boor recurrence (Piegl & Tiller A2.2) for degree `p` at span `s` of `knots`:
-/// writes `N_{s−p..=s, p}(t)` to `out[..=p]`.
-fn basis_at_span(knots: &[f32], p: usize, t: f32, s: usize, out: &mut [f32]) {
-    let t = t.clamp(0.0, 1.0);
-    let mut left = [0.0_f32; 16];
-    let mut right = [0.0_f32; 16];
-    out[0] = 1.0;
+/// The Cox–de Boor recurrence (Piegl & Tiller A2.2) for degree `p` at span `s` of `knots`
+/// (`t` clamped to `[0, 1]`): writes `N_{s−p..=s, p}(t)` to `out[..=p]`.
+pub(crate) fn basis_at_span<T: Real>(knots: &[T], p: usize, t: T, s: usize, out: &mut [T]) {
+    let (zero, one) = (T::from(0), T::from(1));
+    // `f32::clamp`'s comparisons: a NaN stays NaN.
+    let t = if t < zero {
+        zero
+    } else if t > one {
+        one
+    } else {
+        t
+    };
+    let mut left = [zero; 16];
+    let mut right = [zero; 16];
+    out[0] = one;
     for j in 1..=p {
         left[j] = t - knots[s + 1 - j];
         right[j] = knots[s + j] - t;
-        let mut saved = 0.0;
+        let mut saved = zero;
         for r in 0..j {
             let denom = right[r + 1] + left[j - r];
-            let tmp = if denom != 0.0 { out[r] / denom } else { 0.0 };
+            let tmp = if denom != zero { out[r] / denom } else { zero };
             out[r] = saved + right[r + 1] * tmp;
             saved = left[j - r] * tmp;
         }

@@ -26,6 +26,7 @@
 
 use glam::Vec3;
 
+use crate::basis::{basis_at_span, bernstein_all};
 use crate::curve::{CurveBasis, CurveEvaluator};
 use crate::frames::PolylineIndex;
 
@@ -108,45 +109,34 @@ impl CurvePieces {
         };
         let per_span = pieces_per_span(n, spans, (p + 1) * (p + 1) + p * p + 6 * (p + 1));
         let count = spans * per_span;
-        let nodes = interpolation_nodes(p + 1);
-        let seg_nodes = interpolation_nodes(p.max(1));
-        let mut pieces = Self {
-            degree: p,
-            count,
-            curve: Vec::with_capacity(count * (p + 1)),
-            tangent: Vec::with_capacity(count * p.max(1)),
-            point_basis: Vec::with_capacity(count * (p + 1) * (p + 1)),
-            segment_basis: Vec::with_capacity(count * p * p),
-            firsts: Vec::with_capacity(count),
-            end: vec![0.0; 2 * p + 1],
-            index: PolylineIndex::new(vec![Vec3::ZERO; 2]).unwrap_or_else(|| unreachable!()),
+        let knots = knots_f64(p, spans);
+        let (nodes, seg_nodes) = (interpolation_nodes(p + 1), interpolation_nodes(p.max(1)));
+        let basis = |lower: usize, span: usize| {
+            let knots = &knots;
+            move |t: f64, out: &mut [f64]| {
+                basis_f64(evaluator.basis(), n, knots, lower, span, t, out);
+            }
         };
+        let mut curve = Vec::with_capacity(count * (p + 1));
+        let mut tangent = Vec::with_capacity(count * p.max(1));
+        let mut point_basis = Vec::with_capacity(count * (p + 1) * (p + 1));
+        let mut segment_basis = Vec::with_capacity(count * p * p);
+        let mut firsts = Vec::with_capacity(count);
         let mut boundaries = Vec::with_capacity(count + 1);
-        let mut values = vec![0.0_f64; p + 1];
-        let mut samples = vec![vec![0.0_f64; p + 1]; p + 1];
+        let vec3 = |a: [f64; 3]| Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32);
         for k in 0..count {
             let span = k / per_span;
             let (t0, h) = (k as f64 / count as f64, 1.0 / count as f64);
-            // The point basis at the nodes: samples[i][j] = N_{first+i}(t0 + h·node_j).
-            for (j, &u) in nodes.iter().enumerate() {
-                point_basis_f64(evaluator.basis(), n, spans, span, t0 + h * u, &mut values);
-                for i in 0..=p {
-                    samples[i][j] = values[i];
-                }
-            }
-            let basis: Vec<Vec<f64>> = samples
-                .iter()
-                .map(|s| snapped(power_form(&nodes, s)))
-                .collect();
-            // C(u) = Σᵢ Nᵢ(u) Pᵢ, coefficient by coefficient, in f64.
             let first = match evaluator.basis() {
                 CurveBasis::Bezier => 0,
                 CurveBasis::BSpline { .. } => span,
             };
+            let point = piece_functions(&nodes, p + 1, t0, h, basis(0, span));
+            // C(u) = Σᵢ Nᵢ(u) Pᵢ, coefficient by coefficient, in f64.
             let coeffs: Vec<[f64; 3]> = (0..=p)
                 .map(|j| {
                     let mut a = [0.0_f64; 3];
-                    for (i, b) in basis.iter().enumerate() {
+                    for (i, b) in point.iter().enumerate() {
                         let q = ctrl[first + i];
                         a[0] += b[j] * f64::from(q.x);
                         a[1] += b[j] * f64::from(q.y);
@@ -155,7 +145,6 @@ impl CurvePieces {
                     a
                 })
                 .collect();
-            let vec3 = |a: [f64; 3]| Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32);
             boundaries.push(vec3(coeffs[0]));
             if k + 1 == count {
                 let end = coeffs
@@ -163,58 +152,53 @@ impl CurvePieces {
                     .fold([0.0; 3], |s, a| [s[0] + a[0], s[1] + a[1], s[2] + a[2]]);
                 boundaries.push(vec3(end));
             }
-            pieces.curve.extend(coeffs.iter().map(|&a| vec3(a)));
+            curve.extend(coeffs.iter().map(|&a| vec3(a)));
             if p == 0 {
-                pieces.tangent.push(Vec3::ZERO);
+                tangent.push(Vec3::ZERO);
             }
             for (j, a) in coeffs.iter().enumerate().skip(1) {
                 let c = j as f64;
-                pieces.tangent.push(vec3([c * a[0], c * a[1], c * a[2]]));
+                tangent.push(vec3([c * a[0], c * a[1], c * a[2]]));
             }
-            for b in &basis {
-                pieces.point_basis.extend(b.iter().map(|&c| c as f32));
-            }
+            point_basis.extend(point.iter().flatten().map(|&c| c as f32));
             // The segment basis: degree p − 1 over the n − 1 segments.
             if p >= 1 {
-                let mut seg = vec![vec![0.0_f64; p]; p];
-                for (j, &u) in seg_nodes.iter().enumerate() {
-                    segment_basis_f64(evaluator.basis(), n, spans, span, t0 + h * u, &mut values);
-                    for i in 0..p {
-                        seg[i][j] = values[i];
-                    }
-                }
-                for s in &seg {
-                    let c = snapped(power_form(&seg_nodes, s));
-                    pieces.segment_basis.extend(c.iter().map(|&c| c as f32));
-                }
+                let seg = piece_functions(&seg_nodes, p, t0, h, basis(1, span));
+                segment_basis.extend(seg.iter().flatten().map(|&c| c as f32));
             }
-            pieces.firsts.push(first as u32);
+            firsts.push(first as u32);
         }
-        point_basis_f64(evaluator.basis(), n, spans, spans - 1, 1.0, &mut values);
-        for (e, v) in pieces.end.iter_mut().zip(&values) {
+        // The weights at t = 1 from the recurrence, exact.
+        let mut values = [0.0_f64; 17];
+        let mut end = vec![0.0; 2 * p + 1];
+        basis(0, spans - 1)(1.0, &mut values);
+        for (e, v) in end.iter_mut().zip(&values[..=p]) {
             *e = *v as f32;
         }
         if p >= 1 {
-            segment_basis_f64(evaluator.basis(), n, spans, spans - 1, 1.0, &mut values);
-            for (e, v) in pieces.end[p + 1..].iter_mut().zip(&values) {
+            basis(1, spans - 1)(1.0, &mut values);
+            for (e, v) in end[p + 1..].iter_mut().zip(&values[..p]) {
                 *e = *v as f32;
             }
         }
-        // At least two boundaries: the index always exists.
-        pieces.index = PolylineIndex::new(boundaries).unwrap_or_else(|| unreachable!());
-        pieces
+        Self {
+            degree: p,
+            count,
+            curve,
+            tangent,
+            point_basis,
+            segment_basis,
+            firsts,
+            end,
+            // At least two boundaries: the index always exists.
+            index: PolylineIndex::new(boundaries).unwrap_or_else(|| unreachable!()),
+        }
     }
 
     /// Number of pieces `m`.
     #[must_use]
     pub fn count(&self) -> usize {
         self.count
-    }
-
-    /// The piece boundaries `C(k/m)`, `k = 0..=m`.
-    #[must_use]
-    pub fn boundaries(&self) -> &[Vec3] {
-        self.index.points()
     }
 
     /// `(C(u), dC/du)` on piece `k` by Horner's rule.
@@ -368,32 +352,29 @@ impl BasisPieces {
         }
         let per_span = pieces_per_span(n, spans, floats);
         let count = spans * per_span;
+        let kv = knots_f64(p, spans);
         let nodes = interpolation_nodes(p + 1);
-        let mut values = vec![0.0_f64; p + 1];
-        let mut samples = vec![vec![0.0_f64; p + 1]; p + 1];
-        let mut coeffs = Vec::with_capacity(count * (p + 1) * (p + 1));
+        let basis = |span: usize| {
+            let kv = &kv;
+            move |t: f64, out: &mut [f64]| basis_at_span(kv, p, t, span + p, out)
+        };
+        let mut coeffs = Vec::with_capacity(count * floats);
         let mut firsts = Vec::with_capacity(count);
         for k in 0..count {
             let span = k / per_span;
             let (t0, h) = (k as f64 / count as f64, 1.0 / count as f64);
-            for (j, &u) in nodes.iter().enumerate() {
-                bspline_f64(p, n, spans, span, t0 + h * u, &mut values);
-                for i in 0..=p {
-                    samples[i][j] = values[i];
-                }
-            }
-            for s in &samples {
-                coeffs.extend(snapped(power_form(&nodes, s)).iter().map(|&c| c as f32));
-            }
+            let functions = piece_functions(&nodes, p + 1, t0, h, basis(span));
+            coeffs.extend(functions.iter().flatten().map(|&c| c as f32));
             firsts.push(span as u32);
         }
-        bspline_f64(p, n, spans, spans - 1, 1.0, &mut values);
+        let mut end = [0.0_f64; 17];
+        basis(spans - 1)(1.0, &mut end);
         Some(Self {
             degree: p,
             count,
             coeffs,
             firsts,
-            end: values.iter().map(|&v| v as f32).collect(),
+            end: end[..=p].iter().map(|&v| v as f32).collect(),
         })
     }
 
@@ -453,6 +434,30 @@ fn horner3(a: &[Vec3], u: f32) -> Vec3 {
     a.iter().rev().fold(Vec3::ZERO, |acc, &c| acc * u + c)
 }
 
+/// The `len` functions `eval` writes at a parameter, on the piece `[t0, t0 + h]`: each
+/// sampled at `nodes` (in the piece's local parameter) and put in power form, snapped —
+/// `len` rows of `nodes.len()` coefficients.
+fn piece_functions(
+    nodes: &[f64],
+    len: usize,
+    t0: f64,
+    h: f64,
+    eval: impl Fn(f64, &mut [f64]),
+) -> Vec<Vec<f64>> {
+    let mut values = [0.0_f64; 17];
+    let mut samples = vec![vec![0.0; nodes.len()]; len];
+    for (j, &u) in nodes.iter().enumerate() {
+        eval(t0 + h * u, &mut values);
+        for (row, v) in samples.iter_mut().zip(&values) {
+            row[j] = *v;
+        }
+    }
+    samples
+        .iter()
+        .map(|s| snapped(power_form(nodes, s)))
+        .collect()
+}
+
 /// `n` evenly spaced nodes in `(0, 1)`: `(2j + 1) / 2n`. Only additions, products and
 /// divisions reach the coefficients, so every platform computes the same bits (a cosine for
 /// Chebyshev nodes would depend on the platform's `libm`). At degree 15 even spacing
@@ -503,84 +508,34 @@ fn snapped(mut a: Vec<f64>) -> Vec<f64> {
     a
 }
 
-/// The `p + 1` non-zero point basis functions at `t` inside knot span `span` (of `spans`),
-/// in `f64`: Bernstein of degree `n − 1`, or the clamped uniform B-spline of degree `p`.
-fn point_basis_f64(
+/// The knots of the clamped uniform B-spline of degree `p` with `spans` knot spans, in `f64`
+/// (as [`crate::basis::KnotVector::clamped_uniform`] builds them in `f32`).
+fn knots_f64(p: usize, spans: usize) -> Vec<f64> {
+    let mut knots = vec![0.0; p + 1];
+    knots.extend((1..spans).map(|j| j as f64 / spans as f64));
+    knots.extend(std::iter::repeat_n(1.0, p + 1));
+    knots
+}
+
+/// The non-zero basis functions at `t` inside knot span `span`, in `f64`: with `lower = 0`
+/// the curve's `p + 1` point functions (Bernstein of degree `n − 1`, or the B-spline of
+/// degree `p` on `knots`, the curve's knots from [`knots_f64`]); with `lower = 1` its `p`
+/// segment functions (degree one less over the `n − 1` segments: the same interior knots).
+fn basis_f64(
     basis: CurveBasis,
     n: usize,
-    spans: usize,
+    knots: &[f64],
+    lower: usize,
     span: usize,
     t: f64,
     out: &mut [f64],
 ) {
     match basis {
-        CurveBasis::Bezier => bernstein_f64(n - 1, t, out),
-        CurveBasis::BSpline { degree } => bspline_f64(degree, n, spans, span, t, out),
-    }
-}
-
-/// The `p` non-zero segment basis functions at `t` inside knot span `span`, in `f64`:
-/// Bernstein of degree `n − 2`, or the clamped uniform B-spline of degree `p − 1` over the
-/// `n − 1` segments (the same interior knots).
-fn segment_basis_f64(
-    basis: CurveBasis,
-    n: usize,
-    spans: usize,
-    span: usize,
-    t: f64,
-    out: &mut [f64],
-) {
-    match basis {
-        CurveBasis::Bezier => bernstein_f64(n - 2, t, out),
-        CurveBasis::BSpline { degree } => bspline_f64(degree - 1, n - 1, spans, span, t, out),
-    }
-}
-
-/// All Bernstein polynomials of degree `n` at `t` (de Casteljau recurrence), in `f64`.
-fn bernstein_f64(n: usize, t: f64, out: &mut [f64]) {
-    let s = 1.0 - t;
-    out[0] = 1.0;
-    for j in 1..=n {
-        let mut saved = 0.0;
-        for k in 0..j {
-            let tmp = out[k];
-            out[k] = saved + s * tmp;
-            saved = t * tmp;
+        CurveBasis::Bezier => bernstein_all(n - 1 - lower, t, out),
+        CurveBasis::BSpline { degree } => {
+            let q = degree - lower;
+            basis_at_span(&knots[lower..knots.len() - lower], q, t, span + q, out);
         }
-        out[j] = saved;
-    }
-}
-
-/// The `p + 1` non-zero basis functions of the clamped uniform B-spline of degree `p` with
-/// `n` control points (`spans` knot spans) at `t` inside span `span` (Cox–de Boor, Piegl &
-/// Tiller A2.2), in `f64`. Degree 0 is the indicator of the span.
-fn bspline_f64(p: usize, n: usize, spans: usize, span: usize, t: f64, out: &mut [f64]) {
-    debug_assert_eq!(n - p, spans);
-    // Knot u_i: 0 for i ≤ p, (i − p)/spans inside, 1 for i ≥ n.
-    let knot = |i: usize| -> f64 {
-        if i <= p {
-            0.0
-        } else if i >= n {
-            1.0
-        } else {
-            (i - p) as f64 / spans as f64
-        }
-    };
-    let s = span + p; // u_s ≤ t < u_{s+1}
-    let mut left = [0.0_f64; 17];
-    let mut right = [0.0_f64; 17];
-    out[0] = 1.0;
-    for j in 1..=p {
-        left[j] = t - knot(s + 1 - j);
-        right[j] = knot(s + j) - t;
-        let mut saved = 0.0;
-        for r in 0..j {
-            let denom = right[r + 1] + left[j - r];
-            let tmp = if denom != 0.0 { out[r] / denom } else { 0.0 };
-            out[r] = saved + right[r + 1] * tmp;
-            saved = left[j - r] * tmp;
-        }
-        out[j] = saved;
     }
 }
 

@@ -185,17 +185,7 @@ struct Bases {
 }
 
 fn bases(kv: &[KnotVector; 2], u: f32, v: f32) -> Bases {
-    let mut b = Bases {
-        nu: [0.0; MAX_DEGREE + 1],
-        du: [0.0; MAX_DEGREE + 1],
-        nv: [0.0; MAX_DEGREE + 1],
-        dv: [0.0; MAX_DEGREE + 1],
-        su: 0,
-        sv: 0,
-    };
-    b.su = kv[0].basis_with_derivative(u, &mut b.nu, &mut b.du) - kv[0].degree();
-    b.sv = kv[1].basis_with_derivative(v, &mut b.nv, &mut b.dv) - kv[1].degree();
-    b
+    piece_bases(&[None, None], kv, u, v)
 }
 
 /// [`bases`] from power-form pieces of the two knot vectors (or the recurrence of a knot
