@@ -54,6 +54,8 @@ from limb import limb_lengths  # noqa: E402
 # The 3-D view of the default layout (between the side panels, under the menu bar).
 VIEW = (365, 40, 835, 705)
 ADD_MENU = (88, 11)
+# Where the open Add menu is drawn.
+ADD_MENU_BOX = (75, 20, 300, 480)
 # The history panel's list of steps (below its buttons and speed field), with four nodes in
 # the outliner.
 HISTORY_ROWS = (0, 390, 350, 700)
@@ -146,8 +148,28 @@ class Studio:
     def xdo(self, *args):
         subprocess.run(["xdotool", *map(str, args)], env=self.env, check=True)
 
-    def shot(self, name, settle=2.0):
+    def shot(self, name, settle=2.0, until=None, timeout=20.0):
+        """The screen after `settle` seconds, saved as OUT_DIR/STORY-NAME.png. With `until`
+        (a test of a shot), the screen is taken again every half second until the test holds
+        or `timeout` seconds have passed: under software Vulkan on two cores a frame takes a
+        quarter of a second, and the frame that first draws a new kind of thing (its render
+        pipelines built) can take seconds, during which X still shows the frame from before
+        the input. The caller checks the outcome."""
         time.sleep(settle)
+        s = self.capture(name)
+        if until is not None and not until(s):
+            deadline = time.monotonic() + timeout
+            while time.monotonic() < deadline and not until(s):
+                time.sleep(0.5)
+                s = self.capture(name)
+            # The first frame that shows the change may not show all of it: one frame more.
+            time.sleep(1.0)
+            s = self.capture(name)
+        write_png(os.path.join(self.out_dir, f"{self.story}-{name}.png"), *s)
+        return s
+
+    def capture(self, name):
+        """The screen now, taken again (up to three times) while it is a corrupt frame."""
         s = xwd_rgb(self.display)
         # Software Vulkan now and then presents a corrupt frame (the view one flat gizmo
         # colour, glyphs missing from the panels); the next frame is whole. Such a frame is
@@ -159,7 +181,6 @@ class Studio:
                       *s)
             time.sleep(1.0)
             s = xwd_rgb(self.display)
-        write_png(os.path.join(self.out_dir, f"{self.story}-{name}.png"), *s)
         return s
 
     def click(self, x, y, button=1):
@@ -285,16 +306,28 @@ def undo_check(studio, reference, name, what):
     """One Ctrl+Z must bring the view back to `reference`, pixel for pixel; then redo."""
     done = studio.shot(f"{name}-done-again", settle=0.5)
     studio.key("ctrl+z")
-    undone = studio.shot(f"{name}-undone")
+    undone = studio.shot(f"{name}-undone", until=lambda s: differing(reference, s) == 0)
     n = differing(reference, undone)
     expect(n == 0, f"after one Ctrl+Z {what}, the 3-D view differs from before it in {n} "
                    f"pixels")
     studio.key("ctrl+shift+z")
-    redone = studio.shot(f"{name}-redone")
+    redone = studio.shot(f"{name}-redone", until=lambda s: differing(done, s) == 0)
     n = differing(done, redone)
     expect(n == 0, f"after Ctrl+Shift+Z {what}, the 3-D view differs from after it in {n} "
                    f"pixels")
     return redone
+
+
+def add(studio, entry, name):
+    """Add > ENTRY: the menu opened, its entry clicked once the menu is drawn (a click that
+    comes before it lands on the panel beneath). Returns the shot of the open menu."""
+    before = studio.capture(name)
+    studio.click(*ADD_MENU)
+    menu = studio.shot(f"{name}-add-menu", settle=0.5,
+                       until=lambda s: differing(before, s, ADD_MENU_BOX) > 5000)
+    expect(differing(before, menu, ADD_MENU_BOX) > 5000, f"the Add menu did not open ({name})")
+    studio.click(*MENU[entry])
+    return menu
 
 
 def story_head(studio):
@@ -303,11 +336,13 @@ def story_head(studio):
     studio.xdo("mousemove", *cursor)
     time.sleep(0.5)
     studio.key("shift+a")
-    menu = studio.shot("2-shift-a")
-    expect(differing(start, menu, (cursor[0], cursor[1], 835, 700)) > 5000,
+    popup = (cursor[0], cursor[1], 835, 700)
+    menu = studio.shot("2-shift-a", until=lambda s: differing(start, s, popup) > 5000)
+    expect(differing(start, menu, popup) > 5000,
            "Shift+A over the head opened no menu at the cursor")
     studio.click(cursor[0] + POPUP_FFSD[0], cursor[1] + POPUP_FFSD[1])
-    added = studio.shot("3-ffsd-point-added")
+    added = studio.shot("3-ffsd-point-added",
+                        until=lambda s: mesh_outline_change(start, s) > 100 and handles(s))
     expect(mesh_outline_change(start, added) > 100,
            "adding an FFSD control point did not change the head")
     found = handles(added)
@@ -319,10 +354,11 @@ def story_head(studio):
     undo_check(studio, start, "3-ffsd-point-added", "of the added point")
 
     studio.click(round(hx), round(hy))
-    picked = studio.shot("4-handle-selected")
+    picked = studio.shot("4-handle-selected", until=lambda s: handles(s, ACTIVE))
     expect(handles(picked, ACTIVE), "a click on the handle did not select it")
     studio.drag([(round(hx), round(hy)), (round(hx), round(hy) - 25)])
-    dragged = studio.shot("5-point-dragged")
+    dragged = studio.shot("5-point-dragged",
+                          until=lambda s: mesh_outline_change(picked, s) > 100)
     expect(mesh_outline_change(picked, dragged) > 100,
            "dragging the control point's handle did not change the head")
     undo_check(studio, picked, "5-point-dragged", "of the drag")
@@ -330,11 +366,8 @@ def story_head(studio):
 
 def story_spot(studio):
     start = studio.shot("1-start", settle=15.0)
-    studio.click(*ADD_MENU)
-    menu = studio.shot("2-add-menu", settle=1.0)
-    expect(differing(start, menu, (75, 20, 300, 480)) > 5000, "the Add menu did not open")
-    studio.click(*MENU["Lattice (Bernstein)"])
-    added = studio.shot("3-lattice-added")
+    add(studio, "Lattice (Bernstein)", "2")
+    added = studio.shot("3-lattice-added", until=lambda s: len(handles(s)) >= 12)
     found = handles(added)
     # 27 control points, some in front of others: at least a dozen separate handles show.
     expect(len(found) >= 12, f"the new 3x3x3 lattice shows {len(found)} separate handles")
@@ -343,10 +376,11 @@ def story_spot(studio):
     # The top front corner (nearest the top left of the view), dragged up and to the left.
     _, hx, hy = min(found, key=lambda b: b[1] + b[2])
     studio.click(round(hx), round(hy))
-    picked = studio.shot("4-point-selected")
+    picked = studio.shot("4-point-selected", until=lambda s: handles(s, ACTIVE))
     expect(handles(picked, ACTIVE), "a click on the control point did not select it")
     studio.drag([(round(hx), round(hy)), (round(hx) - 60, round(hy) - 50)])
-    dragged = studio.shot("5-point-dragged")
+    dragged = studio.shot("5-point-dragged",
+                          until=lambda s: mesh_outline_change(picked, s) > 300)
     expect(mesh_outline_change(picked, dragged) > 300,
            "dragging a lattice control point did not deform the cow")
     undo_check(studio, picked, "5-point-dragged", "of the control point drag")
@@ -362,7 +396,7 @@ def story_spot(studio):
     studio.xdo("mousemove", round((x0 + x1) / 2), round(y1) + 40)
     studio.key("b")
     studio.drag([(round(x0), round(y0)), (round(x1), round(y1))])
-    boxed = studio.shot("6-box-selected")
+    boxed = studio.shot("6-box-selected", until=lambda s: len(handles(s, ACTIVE)) >= 2)
     chosen = handles(boxed, ACTIVE)
     expect(len(chosen) >= 2, f"the box selected {len(chosen)} control points, not several")
     # Selected handles are drawn larger, with white crosses: pixels near handles are left
@@ -373,15 +407,16 @@ def story_spot(studio):
            "box select changed the mesh")
     _, gx, gy = max(chosen, key=lambda b: b[0])
     studio.drag([(round(gx), round(gy)), (round(gx), round(gy) - 40)])
-    grouped = studio.shot("7-group-dragged")
+    grouped = studio.shot("7-group-dragged",
+                          until=lambda s: mesh_outline_change(boxed, s) > 300)
     expect(len(handles(grouped, ACTIVE)) >= 2, "the group drag lost the selection")
     expect(mesh_outline_change(boxed, grouped) > 300,
            "dragging the selected control points did not deform the cow")
     undo_check(studio, boxed, "7-group-dragged", "of the group drag")
 
-    studio.click(*ADD_MENU)
-    studio.click(*MENU["Sphere volume"])
-    masked = studio.shot("8-sphere-masks-the-layer")
+    add(studio, "Sphere volume", "8")
+    masked = studio.shot("8-sphere-masks-the-layer",
+                         until=lambda s: mesh_outline_change(grouped, s) > 100)
     expect(mesh_outline_change(grouped, masked) > 100,
            "a new sphere volume on the selected layer did not change the deformation")
     undo_check(studio, grouped, "8-sphere-masks-the-layer", "of the added volume")
@@ -389,9 +424,8 @@ def story_spot(studio):
 
 def story_sketch(studio):
     start = studio.shot("1-start", settle=15.0)
-    studio.click(*ADD_MENU)
-    studio.click(*MENU["Sketch bend"])
-    mode = studio.shot("2-sketch-mode", settle=1.0)
+    add(studio, "Sketch bend", "2")
+    mode = studio.shot("2-sketch-mode", settle=1.0, until=lambda s: differing(start, s) > 0)
     expect(differing(start, mode) > 0, "sketch mode shows no hint in the view")
     # The reference stroke: down the upper arm from the armpit's height, past the elbow, to
     # the wrist (a stroke starting on the shoulder would cut through the chest).
@@ -416,8 +450,8 @@ def story_sketch(studio):
 def bend_arm(studio):
     """Sketch mode on MakeHuman's right arm: the reference stroke down the arm, the target
     bent at the elbow (the strokes of the sketch story). Returns the shot after it."""
-    studio.click(*ADD_MENU)
-    studio.click(*MENU["Sketch bend"])
+    add(studio, "Sketch bend", "2")
+    time.sleep(1.0)
     reference = [(694, 240), (705, 258), (716, 276), (731, 300), (746, 323)]
     studio.drag(reference, steps=6)
     time.sleep(3.0)
@@ -513,8 +547,8 @@ def story_animate(studio):
     expect(forearm_up(straight) < 100, "keying the straight target moved the arm")
     # The neck: a twist drawn at frame 24 (from the chest up, so the head turns), keyed.
     studio.click(*ruler(24))
-    studio.click(*ADD_MENU)
-    studio.click(*MENU["Sketch twist"])
+    add(studio, "Sketch twist", "5")
+    time.sleep(1.0)
     studio.drag([(604, 188), (604, 173), (604, 158), (604, 143), (604, 128)], steps=6)
     time.sleep(3.0)
     studio.drag([(640, 160), (643, 160), (646, 160)], steps=4)
@@ -713,53 +747,56 @@ def story_technical(studio):
     layer toggled off and on; a sphere volume masking the lattice's layer; Ctrl+S; then
     `ductile apply` of the saved scene from the command line, once and in a batch."""
     start = studio.shot("1-start", settle=15.0)
-    studio.click(*ADD_MENU)
-    studio.click(*MENU["Lattice (Bernstein)"])
-    added = studio.shot("2-lattice-added")
+    add(studio, "Lattice (Bernstein)", "2")
+    added = studio.shot("2-lattice-added", until=lambda s: len(handles(s)) >= 12)
     _, hx, hy = min(handles(added), key=lambda b: b[1] + b[2])
     studio.drag([(round(hx), round(hy)), (round(hx) - 60, round(hy) - 50)])
-    lattice = studio.shot("3-lattice-dragged")
+    lattice = studio.shot("3-lattice-dragged",
+                          until=lambda s: mesh_outline_change(added, s) > 300)
     expect(mesh_outline_change(added, lattice) > 300, "the lattice drag did not deform Spot")
-    studio.click(*ADD_MENU)
-    studio.click(*MENU["Shape surface"])
-    added = studio.shot("4-surface-added")
-    expect(differing(lattice, added, (365, 40, 835, 705)) > 0, "no shape surface appeared")
+    add(studio, "Shape surface", "4")
+    # The lattice's handles give way to the surface's 4x4 net.
+    added = studio.shot("4-surface-added",
+                        until=lambda s: differing(lattice, s) > 0 and len(handles(s)) >= 8)
+    expect(differing(lattice, added) > 0, "no shape surface appeared")
     # The surface's net spans the cow's long side; drag a middle point of its lower rows.
     found = sorted(handles(added), key=lambda b: -b[2])
     _, sx, sy = found[len(found) // 2]
     studio.drag([(round(sx), round(sy)), (round(sx), round(sy) - 60)])
-    surface = studio.shot("5-surface-dragged")
+    surface = studio.shot("5-surface-dragged",
+                          until=lambda s: mesh_outline_change(added, s) > 100)
     expect(mesh_outline_change(added, surface) > 100, "the surface drag did not deform Spot")
-    studio.click(*ADD_MENU)
-    studio.click(*MENU["Axial deformation"])
-    added = studio.shot("6-axial-added")
+    before = surface
+    add(studio, "Axial deformation", "6")
+    added = studio.shot("6-axial-added", until=lambda s: differing(before, s) > 0)
     _, ax, ay = max(handles(added), key=lambda b: b[1])  # the axis end at the tail
     studio.drag([(round(ax), round(ay)), (round(ax), round(ay) - 70)])
-    axial = studio.shot("7-axial-dragged")
+    axial = studio.shot("7-axial-dragged",
+                        until=lambda s: mesh_outline_change(added, s) > 100)
     expect(mesh_outline_change(added, axial) > 100, "the axial drag did not deform Spot")
     # Reorder: the axial row (third) dragged by its grip onto the first row.
     studio.drag([stack_row(2, "grip"), stack_row(0, "grip")], steps=6)
-    reordered = studio.shot("8-reordered")
+    reordered = studio.shot("8-reordered", until=lambda s: differing(axial, s) > 100)
     expect(differing(axial, reordered) > 100, "moving the axial layer to the bottom of the "
                                               "stack changed nothing")
     undo_check(studio, axial, "8-reordered", "of the reorder")
     # Toggle the (now second) lattice layer off, then on again.
     studio.click(*stack_row(1, "enable"))
-    off = studio.shot("9-lattice-off")
+    off = studio.shot("9-lattice-off",
+                      until=lambda s: mesh_outline_change(reordered, s) > 300)
     expect(mesh_outline_change(reordered, off) > 300, "turning the lattice layer off changed "
                                                       "nothing")
     studio.click(*stack_row(1, "enable"))
-    on = studio.shot("10-lattice-on")
+    on = studio.shot("10-lattice-on", until=lambda s: differing(reordered, s) == 0)
     expect(differing(reordered, on) == 0, "turning the lattice layer on again does not "
                                           "restore Spot")
     # Mask: select the lattice's layer (its name in the stack), then Add > Sphere volume.
     studio.click(*stack_row(1, "name"))
-    studio.click(*ADD_MENU)
-    # A debug build's frame takes ~0.25 s under software Vulkan: let the menu be drawn
-    # before its item is clicked (a click that comes first lands on the panel beneath).
-    studio.shot("11-add-menu", settle=1.5)
-    studio.click(*MENU["Sphere volume"])
-    masked = studio.shot("11-lattice-masked")
+    time.sleep(1.0)
+    add(studio, "Sphere volume", "11")
+    masked = studio.shot("11-lattice-masked",
+                         until=lambda s: differing(on, s, HISTORY_ROWS) > 0
+                         and mesh_outline_change(on, s) > 100)
     # The history list gains the step (a changed selection alone does not change it), and
     # the masked lattice moves less of the cow.
     expect(differing(on, masked, HISTORY_ROWS) > 0, "Add > Sphere volume added no step to the "
