@@ -22,17 +22,17 @@
 //! `W/σ` is evaluated as `exp(−(|X − V|^α − |X − V_min|^α) / (2ε²))`, which is the same
 //! number but never divides by an underflowed `σ`.
 //!
-//! Vertices are deformed sixteen at a time ([`wide::f32x16`] lanes, with `wide`'s polynomial
-//! `exp` and `ln`, accurate to a few ulp). Every scalar value this module computes (`S_ref`,
-//! [`HeightLimit::limit`], the anchors' `|X − V_min|^α`) goes through the same lane
-//! arithmetic, so a vertex gets the same bits whichever vertices share its lanes.
+//! Vertices are deformed sixteen at a time (`crate::lane`'s lanes, with `wide`'s polynomial
+//! `exp` and `ln`, accurate to a few ulp), in a kernel compiled for the widest registers the
+//! CPU has ([`pulp`]'s runtime dispatch: AVX2 where present, SSE2 on any x86-64); no operation
+//! is fused, so every register width gives the same bits. Every scalar value this module
+//! computes (`S_ref`, [`HeightLimit::limit`], the anchors' `|X − V_min|^α`) goes through the
+//! same lane arithmetic, so a vertex gets the same bits whichever vertices share its lanes.
 
 use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Serialize};
-use wide::f32x16 as Lane;
 
-/// Vertices per lane group.
-const LANES: usize = 16;
+use crate::lane::{LANES, Lane, Mask};
 
 use rayon::prelude::*;
 
@@ -186,6 +186,7 @@ impl HeightLimit {
 
     /// [`HeightLimit::limit`] on a lane group of displacements (`s = |d|`; a zero `d` is
     /// returned unchanged).
+    #[inline(always)]
     fn limit_lanes(&self, d: Lanes3, s_ref: f32) -> Lanes3 {
         let s = d.length();
         let zero = s.simd_eq(Lane::ZERO);
@@ -227,6 +228,7 @@ impl Lanes3 {
     };
 
     /// `v` in every lane.
+    #[inline(always)]
     fn splat(v: Vec3) -> Self {
         Self {
             x: Lane::splat(v.x),
@@ -236,32 +238,35 @@ impl Lanes3 {
     }
 
     /// The positions of `active` (up to a lane group; the last one repeated to fill the lanes).
+    #[inline(always)]
     fn gather(positions: &[Vec3], active: &[u32]) -> Self {
-        Self::fill(active.len(), |j| positions[active[j] as usize])
+        let mut lanes = Self::ZERO;
+        let last = active.len() - 1;
+        for j in 0..LANES {
+            lanes.set(j, positions[active[j.min(last)] as usize]);
+        }
+        lanes
     }
 
     /// Up to a lane group of points (the last one repeated to fill the lanes).
+    #[inline(always)]
     fn load(points: &[Vec3]) -> Self {
-        Self::fill(points.len(), |j| points[j])
+        let mut lanes = Self::ZERO;
+        let last = points.len() - 1;
+        for j in 0..LANES {
+            lanes.set(j, points[j.min(last)]);
+        }
+        lanes
     }
 
-    /// Lanes `point(0)`, …, `point(count − 1)`, then `point(count − 1)` repeated
-    /// (`1 ≤ count`).
-    #[inline]
-    fn fill(count: usize, point: impl Fn(usize) -> Vec3) -> Self {
-        let (mut x, mut y, mut z) = ([0.0_f32; LANES], [0.0_f32; LANES], [0.0_f32; LANES]);
-        for j in 0..LANES {
-            let v = point(j.min(count - 1));
-            (x[j], y[j], z[j]) = (v.x, v.y, v.z);
-        }
-        Self {
-            x: Lane::new(x),
-            y: Lane::new(y),
-            z: Lane::new(z),
-        }
+    /// Lane `j` set to `v`.
+    #[inline(always)]
+    fn set(&mut self, j: usize, v: Vec3) {
+        (self.x.0[j], self.y.0[j], self.z.0[j]) = (v.x, v.y, v.z);
     }
 
     /// Lane `j` as a vector.
+    #[inline(always)]
     fn lane(&self, j: usize) -> Vec3 {
         Vec3::new(
             self.x.as_array()[j],
@@ -271,6 +276,7 @@ impl Lanes3 {
     }
 
     /// Writes the first `out.len()` lanes to `out`.
+    #[inline(always)]
     fn write(&self, out: &mut [Vec3]) {
         let (x, y, z) = (self.x.as_array(), self.y.as_array(), self.z.as_array());
         for (j, o) in out.iter_mut().enumerate() {
@@ -278,6 +284,7 @@ impl Lanes3 {
         }
     }
 
+    #[inline(always)]
     fn add(self, o: Self) -> Self {
         Self {
             x: self.x + o.x,
@@ -286,6 +293,7 @@ impl Lanes3 {
         }
     }
 
+    #[inline(always)]
     fn sub(self, o: Self) -> Self {
         Self {
             x: self.x - o.x,
@@ -294,6 +302,7 @@ impl Lanes3 {
         }
     }
 
+    #[inline(always)]
     fn scale(self, k: Lane) -> Self {
         Self {
             x: self.x * k,
@@ -303,16 +312,19 @@ impl Lanes3 {
     }
 
     /// `x² + y² + z²`, summed in that order (as glam's `dot`).
+    #[inline(always)]
     fn length_squared(&self) -> Lane {
         self.x * self.x + self.y * self.y + self.z * self.z
     }
 
+    #[inline(always)]
     fn length(&self) -> Lane {
         self.length_squared().sqrt()
     }
 
     /// `other` in the lanes where `mask` is set, `self` elsewhere.
-    fn select(self, mask: Lane, other: Self) -> Self {
+    #[inline(always)]
+    fn select(self, mask: Mask, other: Self) -> Self {
         Self {
             x: mask.select(other.x, self.x),
             y: mask.select(other.y, self.y),
@@ -368,7 +380,7 @@ struct PreparedPoint {
 
 impl PreparedPoint {
     /// `γ · W/σ · (V − T)` in each lane.
-    #[inline]
+    #[inline(always)]
     fn displacement(&self, v: &Lanes3) -> Lanes3 {
         let d2 = Lanes3::splat(self.centre).sub(*v).length_squared();
         let e = (pow_half(d2, self.half_alpha) - Lane::splat(self.anchor_pow))
@@ -383,7 +395,7 @@ impl PreparedPoint {
 }
 
 /// `(d²)^(α/2) = |d|^α` in each lane, with fast paths for α = 2 and α = 1.
-#[inline]
+#[inline(always)]
 fn pow_half(d2: Lane, half_alpha: f32) -> Lane {
     if half_alpha == 1.0 {
         d2
@@ -437,10 +449,13 @@ impl FfsdBind {
     }
 
     /// `D(V) = Σₖ dₖ(V)` in each lane (Eq. 3), summed in point order from zero.
+    #[inline(always)]
     fn sum(&self, v: &Lanes3) -> Lanes3 {
-        self.points
-            .iter()
-            .fold(Lanes3::ZERO, |acc, p| acc.add(p.displacement(v)))
+        let mut acc = Lanes3::ZERO;
+        for p in &self.points {
+            acc = acc.add(p.displacement(v));
+        }
+        acc
     }
 }
 
@@ -521,11 +536,16 @@ impl Deformer for FfsdTool {
         Ok(bind)
     }
 
-    /// `P = V + D(V)` (with the height limit), a lane group at a time.
+    /// `P = V + D(V)` (with the height limit), a lane group at a time, compiled for the
+    /// widest registers the CPU has.
     fn deform(&self, bind: &FfsdBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
-        for (o, a) in out.chunks_mut(LANES).zip(active.chunks(LANES)) {
-            self.deform_lanes(bind, Lanes3::gather(positions, a), o);
-        }
+        pulp::Arch::new().dispatch(Deform {
+            tool: self,
+            bind,
+            positions,
+            vertices: Vertices::Active(active),
+            out,
+        });
     }
 
     /// Points and references map as points; `ε` becomes `ε · s^(α/2)` with `s` the uniform
@@ -562,13 +582,17 @@ impl FfsdTool {
     /// [`Deformer::deform`] on input positions already gathered: `out[j]` is the deformed
     /// `inputs[j]` (same bits as `deform` gives that vertex).
     pub fn deform_inputs(&self, bind: &FfsdBind, inputs: &[Vec3], out: &mut [Vec3]) {
-        for (o, v) in out.chunks_mut(LANES).zip(inputs.chunks(LANES)) {
-            self.deform_lanes(bind, Lanes3::load(v), o);
-        }
+        pulp::Arch::new().dispatch(Deform {
+            tool: self,
+            bind,
+            positions: inputs,
+            vertices: Vertices::All,
+            out,
+        });
     }
 
     /// `P = V + D(V)`, limited, for one lane group; writes `out.len()` lanes.
-    #[inline]
+    #[inline(always)]
     fn deform_lanes(&self, bind: &FfsdBind, v: Lanes3, out: &mut [Vec3]) {
         let d = bind.sum(&v);
         let d = match &self.height {
@@ -576,6 +600,45 @@ impl FfsdTool {
             None => d,
         };
         v.add(d).write(out);
+    }
+}
+
+/// Which vertices a [`Deform`] reads.
+enum Vertices<'a> {
+    /// `positions[active[j]]` for output `j`.
+    Active(&'a [u32]),
+    /// `positions[j]` for output `j`.
+    All,
+}
+
+/// [`FfsdTool::deform_lanes`] over a slice, as a kernel that [`pulp`] compiles for each
+/// register width (its lanes are [`Lane`]s: the same bits at every width).
+struct Deform<'a> {
+    tool: &'a FfsdTool,
+    bind: &'a FfsdBind,
+    positions: &'a [Vec3],
+    vertices: Vertices<'a>,
+    out: &'a mut [Vec3],
+}
+
+impl pulp::WithSimd for Deform<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let (tool, bind, positions) = (self.tool, self.bind, self.positions);
+        match self.vertices {
+            Vertices::Active(active) => {
+                for (o, a) in self.out.chunks_mut(LANES).zip(active.chunks(LANES)) {
+                    tool.deform_lanes(bind, Lanes3::gather(positions, a), o);
+                }
+            }
+            Vertices::All => {
+                for (o, v) in self.out.chunks_mut(LANES).zip(positions.chunks(LANES)) {
+                    tool.deform_lanes(bind, Lanes3::load(v), o);
+                }
+            }
+        }
     }
 }
 
@@ -588,21 +651,11 @@ fn closest(positions: &[Vec3], active: &[u32], xs: &[Vec3]) -> Vec<u32> {
     // when one beats the best so far, the group's lanes in order with the same strict test.
     let centres: Vec<Lanes3> = xs.iter().map(|&x| Lanes3::splat(x)).collect();
     let search = |chunk: &[u32]| -> Vec<(u32, f32)> {
-        let mut best = vec![(chunk[0], f32::INFINITY); xs.len()];
-        for group in chunk.chunks(LANES) {
-            let v = Lanes3::gather(positions, group);
-            for (b, c) in best.iter_mut().zip(&centres) {
-                let d = v.sub(*c).length_squared();
-                if d.simd_lt(Lane::splat(b.1)).any() {
-                    for (&i, &d) in group.iter().zip(d.as_array()) {
-                        if d < b.1 {
-                            *b = (i, d);
-                        }
-                    }
-                }
-            }
-        }
-        best
+        pulp::Arch::new().dispatch(Nearest {
+            positions,
+            chunk,
+            centres: &centres,
+        })
     };
     if active.len() < PARALLEL_THRESHOLD {
         return search(active).into_iter().map(|b| b.0).collect();
@@ -617,6 +670,37 @@ fn closest(positions: &[Vec3], active: &[u32], xs: &[Vec3]) -> Vec<u32> {
         }
     }
     best.into_iter().map(|b| b.0).collect()
+}
+
+/// The kernel of [`closest`] over one chunk of active vertices: for each centre, the
+/// nearest vertex and its squared distance.
+struct Nearest<'a> {
+    positions: &'a [Vec3],
+    chunk: &'a [u32],
+    centres: &'a [Lanes3],
+}
+
+impl pulp::WithSimd for Nearest<'_> {
+    type Output = Vec<(u32, f32)>;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> Self::Output {
+        let mut best = vec![(self.chunk[0], f32::INFINITY); self.centres.len()];
+        for group in self.chunk.chunks(LANES) {
+            let v = Lanes3::gather(self.positions, group);
+            for (b, c) in best.iter_mut().zip(self.centres) {
+                let d = v.sub(*c).length_squared();
+                if d.simd_lt(Lane::splat(b.1)).any() {
+                    for (&i, &d) in group.iter().zip(d.as_array()) {
+                        if d < b.1 {
+                            *b = (i, d);
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
 }
 
 /// A macro: a named, predefined set of control points with base parameters, driven by one

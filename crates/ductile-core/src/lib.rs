@@ -20,6 +20,7 @@ pub mod error;
 pub mod ffsd;
 pub mod frames;
 pub mod influence;
+mod lane;
 pub mod lattice;
 pub mod mesh;
 pub mod normals;
