@@ -455,14 +455,21 @@ fn status_info(inputs: &UiInputs, frame_ms: Option<f64>) -> StatusInfo {
     StatusInfo {
         vertices,
         triangles,
-        evaluation: inputs.stats.last.as_ref().map(|(m, r)| {
-            (
-                m.clone(),
-                r.duration.as_secs_f64() * 1000.0,
-                r.layers_evaluated,
-                r.background,
-            )
-        }),
+        // The last evaluation, while its mesh is still in the scene (File > New or Open
+        // replace the meshes; the next evaluation of a new one takes the place).
+        evaluation: inputs
+            .stats
+            .last
+            .as_ref()
+            .filter(|(m, _)| inputs.doc.shown().mesh_names().contains(&m.as_str()))
+            .map(|(m, r)| {
+                (
+                    m.clone(),
+                    r.duration.as_secs_f64() * 1000.0,
+                    r.layers_evaluated,
+                    r.background,
+                )
+            }),
         frame_ms,
         drag: inputs
             .drag
