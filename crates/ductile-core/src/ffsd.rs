@@ -996,6 +996,55 @@ mod tests {
     /// once (two full lane groups and a padded one), from gathered inputs, and each one
     /// alone agree, and the scalar height limit agrees with the lanes'.
     #[test]
+    fn every_register_width_gives_the_same_bits() {
+        // The kernel as dispatched (AVX2 on a CPU that has it) and compiled without target
+        // features (SSE2 on x86-64): α of 0.8 and 1.3 take `ln` and `exp` in every lane.
+        let positions: Vec<Vec3> = (0..203)
+            .map(|i| {
+                let t = i as f32 * 0.031;
+                Vec3::new(t.sin(), (t * 1.7).cos() * 0.8, t * 0.2 - 0.5)
+            })
+            .collect();
+        let active: Vec<u32> = (0..203).filter(|i| i % 7 != 3).collect();
+        let mut a = ControlPoint::basic(Vec3::new(0.4, 0.2, 0.1), 0.35, 0.8, 0.3);
+        a.mode = PointMode::Virtual;
+        let b = ControlPoint::basic(Vec3::new(-0.3, 0.5, -0.2), -0.2, 1.3, 0.25);
+        let mut tool = FfsdTool::new(vec![a, b]);
+        tool.height = Some(HeightLimit::Below { theta: 0.2 });
+        let topology = triangle().topology().clone();
+        let bind = tool
+            .bind(&BindInput {
+                positions: &positions,
+                topology: &topology,
+                active: &active,
+            })
+            .unwrap();
+        let mut dispatched = vec![Vec3::ZERO; active.len()];
+        tool.deform(&bind, &positions, &active, &mut dispatched);
+        let mut baseline = vec![Vec3::ZERO; active.len()];
+        pulp::WithSimd::with_simd(
+            Deform {
+                tool: &tool,
+                bind: &bind,
+                positions: &positions,
+                vertices: Vertices::Active(&active),
+                out: &mut baseline,
+            },
+            pulp::Scalar::new(),
+        );
+        let bits = |v: &[Vec3]| -> Vec<[u32; 3]> {
+            v.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
+        };
+        assert_eq!(bits(&dispatched), bits(&baseline));
+        assert!(
+            dispatched
+                .iter()
+                .zip(&active)
+                .any(|(d, &i)| *d != positions[i as usize])
+        );
+    }
+
+    #[test]
     fn lanes_give_each_vertex_the_same_bits_in_any_group() {
         let positions: Vec<Vec3> = (0..37)
             .map(|i| Vec3::new(i as f32 * 0.1, (i % 5) as f32 * 0.2, 0.05 * (i % 3) as f32))
