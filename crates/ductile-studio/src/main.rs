@@ -9,6 +9,7 @@ mod autosave;
 mod box_select;
 mod camera;
 mod compare;
+mod ctrl_text;
 mod files;
 mod panels;
 mod screenshot;

@@ -117,6 +117,12 @@ impl Plugin for StudioPlugin {
         )
         .add_systems(Last, crate::autosave::autosave_at_exit)
         .add_systems(
+            PreUpdate,
+            crate::ctrl_text::strip_ctrl_text
+                .after(bevy_egui::EguiInputSet::WriteEguiEvents)
+                .before(bevy_egui::EguiPreUpdateSet::BeginPass),
+        )
+        .add_systems(
             Update,
             (
                 (
