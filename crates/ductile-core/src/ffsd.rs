@@ -771,6 +771,16 @@ mod tests {
         stack.evaluate_welded(&triangle()).unwrap()
     }
 
+    /// `tool` bound on `positions` (any topology: an FFSD bind reads none), `active` active.
+    fn bound(tool: &FfsdTool, positions: &[Vec3], active: &[u32]) -> FfsdBind {
+        tool.bind(&BindInput {
+            positions,
+            topology: triangle().topology(),
+            active,
+        })
+        .unwrap()
+    }
+
     fn assert_close(got: &[Vec3], expected: &[[f32; 3]]) {
         for (i, (g, e)) in got.iter().zip(expected).enumerate() {
             let e = Vec3::from_array(*e);
@@ -1011,14 +1021,7 @@ mod tests {
         let b = ControlPoint::basic(Vec3::new(-0.3, 0.5, -0.2), -0.2, 1.3, 0.25);
         let mut tool = FfsdTool::new(vec![a, b]);
         tool.height = Some(HeightLimit::Below { theta: 0.2 });
-        let topology = triangle().topology().clone();
-        let bind = tool
-            .bind(&BindInput {
-                positions: &positions,
-                topology: &topology,
-                active: &active,
-            })
-            .unwrap();
+        let bind = bound(&tool, &positions, &active);
         let mut dispatched = vec![Vec3::ZERO; active.len()];
         tool.deform(&bind, &positions, &active, &mut dispatched);
         let mut baseline = vec![Vec3::ZERO; active.len()];
@@ -1057,14 +1060,7 @@ mod tests {
             below: 0.1,
             above: 0.7,
         });
-        let topology = triangle().topology().clone();
-        let bind = tool
-            .bind(&BindInput {
-                positions: &positions,
-                topology: &topology,
-                active: &active,
-            })
-            .unwrap();
+        let bind = bound(&tool, &positions, &active);
         let mut all = vec![Vec3::ZERO; 37];
         tool.deform(&bind, &positions, &active, &mut all);
         let mut gathered = vec![Vec3::ZERO; 37];

@@ -221,7 +221,7 @@ impl LayerBinding {
             let w = w * layer.weight;
             positions.push(if w == 1.0 { d } else { p + (d - p) * w });
         }
-        if let Some(k) = positions.iter().position(|p| !p.is_finite()) {
+        if let Some(k) = first_non_finite(positions) {
             return Err(CoreError::Degenerate {
                 what: format!("layer '{}'", layer.name),
                 problem: format!("the refinement produced a non-finite position for vertex {k}"),

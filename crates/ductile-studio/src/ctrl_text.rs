@@ -11,24 +11,21 @@ use bevy::input::keyboard::{Key, KeyboardFocusLost, KeyboardInput};
 use bevy::prelude::*;
 use bevy_egui::{EguiInput, egui};
 
-/// Whether Ctrl or Super was held after the key messages seen so far (across frames).
-#[derive(Debug, Default)]
-pub struct ModifierHeld(bool);
-
 /// Removes from every egui context's input the text events of characters pressed while Ctrl
-/// or Super was held (runs after bevy_egui writes its events, before the egui pass).
+/// or Super was held (runs after bevy_egui writes its events, before the egui pass). `held`:
+/// whether Ctrl or Super was down after the key messages seen so far (across frames).
 pub fn strip_ctrl_text(
     mut keys: MessageReader<KeyboardInput>,
     mut focus_lost: MessageReader<KeyboardFocusLost>,
-    mut held: Local<ModifierHeld>,
+    mut held: Local<bool>,
     mut inputs: Query<&mut EguiInput>,
 ) {
     if focus_lost.read().count() > 0 {
-        held.0 = false;
+        *held = false;
     }
     let typed = typed_with_modifier(
         keys.read().map(|k| (&k.logical_key, k.state.is_pressed())),
-        &mut held.0,
+        &mut held,
     );
     if typed.is_empty() {
         return;

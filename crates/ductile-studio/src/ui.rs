@@ -6,6 +6,7 @@ use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy_egui::{EguiContexts, egui};
 use ductile_bevy::prelude::*;
+use ductile_scene::document::NodeKind;
 
 use crate::authoring::AddNode;
 use crate::camera::{KeyboardToViewport, PointerOverViewport};
@@ -461,7 +462,13 @@ fn status_info(inputs: &UiInputs, frame_ms: Option<f64>) -> StatusInfo {
             .stats
             .last
             .as_ref()
-            .filter(|(m, _)| inputs.doc.shown().mesh_names().contains(&m.as_str()))
+            .filter(|(m, _)| {
+                inputs
+                    .doc
+                    .shown()
+                    .node(m)
+                    .is_ok_and(|n| matches!(n.kind, NodeKind::Mesh(_)))
+            })
             .map(|(m, r)| {
                 (
                     m.clone(),
