@@ -321,6 +321,9 @@ def undo_check(studio, reference, name, what):
 def add(studio, entry, name):
     """Add > ENTRY: the menu opened, its entry clicked once the menu is drawn (a click that
     comes before it lands on the panel beneath). Returns the shot of the open menu."""
+    # The picture to compare with is taken once the last step's frames are drawn: a stale
+    # one could differ from the next frame by more than the menu does.
+    time.sleep(1.5)
     before = studio.capture(name)
     studio.click(*ADD_MENU)
     menu = studio.shot(f"{name}-add-menu", settle=0.5,
@@ -562,7 +565,8 @@ def story_animate(studio):
     studio.key("0")
     studio.key("Return")
     studio.key("Escape")  # nothing selected: no gizmos over the figure
-    expect(unkeyed(studio.shot("6-angle-offered", settle=2.0)) > 100,
+    expect(unkeyed(studio.shot("6-angle-offered", settle=2.0,
+                               until=lambda s: unkeyed(s) > 100)) > 100,
            "no offer to key the twist's angle at frame 0")
     studio.key("k")  # K keys the offered edit
     rest = studio.shot("6-rest-at-0", settle=3.0)
@@ -647,7 +651,8 @@ def story_crash(studio):
     expect(differing(start, offer, OFFER) > 1000, "no offer to recover the unsaved work")
     studio.click(*RECOVER)
     studio.key("Escape")
-    recovered = studio.shot("4-recovered", settle=4.0)
+    recovered = studio.shot("4-recovered", settle=4.0,
+                            until=lambda s: differing(edited, s) < 200)
     expect(differing(edited, recovered) < 200,
            "after Recover the head is not the one edited before the kill")
     studio.app.kill()
