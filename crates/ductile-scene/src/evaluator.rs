@@ -23,6 +23,11 @@
 //! old one is *refreshed*: only its active vertices in `D` are deformed again, the others get
 //! their old output bits back.
 //!
+//! A changed layer whose tool must be bound again (its rest state changed: a lattice's
+//! control points, an FFSD point) but whose influence, area and masked input are unchanged
+//! keeps its *mask*: the volume weights are not computed again (on a million vertices they
+//! cost milliseconds), only the tool is bound within the old mask.
+//!
 //! A layer reads the positions of its *domain*: the vertices of its area when it has one
 //! and its tool reads only the active vertices (FFSD, lattice, curve, axial and shape
 //! surface tools), every vertex otherwise (no area, or DOGME / Direct FFD constraints
@@ -135,6 +140,12 @@ impl Resolved {
     /// layer, influence and area, and a tool with the same rest state
     /// ([`Tool::same_rest_state`]); the tools' deformed states and the weights may differ.
     fn same_rest(&self, other: &Resolved) -> bool {
+        self.same_mask(other) && self.layer.tool.same_rest_state(&other.layer.tool)
+    }
+
+    /// True when the layer's mask on an input is the mask `other` has on the same input:
+    /// the same layer, influence and area (the tools may differ).
+    fn same_mask(&self, other: &Resolved) -> bool {
         let same_area = match (&self.area, &other.area) {
             (Some(a), Some(b)) => Arc::ptr_eq(a, b) || a == b,
             (None, None) => true,
@@ -144,7 +155,12 @@ impl Resolved {
             && self.layer.name == other.layer.name
             && self.layer.enabled == other.layer.enabled
             && self.layer.influence == other.layer.influence
-            && self.layer.tool.same_rest_state(&other.layer.tool)
+    }
+
+    /// The welded vertices whose input positions the layer's mask reads: its area's, or
+    /// `None` for every vertex.
+    fn mask_domain(&self) -> Option<&[u32]> {
+        self.area.as_deref().map(Vec::as_slice)
     }
 
     /// The welded vertices whose input positions the layer's mask, bind and deformation
@@ -915,6 +931,48 @@ impl MeshEvaluator {
                 continue;
             }
             self.binds += 1;
+            // The next old stage, when the layer's influence and the input its mask reads
+            // are unchanged but its tool's rest state changed (a lattice's control points,
+            // an FFSD point): its mask is still the mask on this input (the volume weights
+            // of a million vertices cost milliseconds); only the tool binds again.
+            if matched.is_none()
+                && let Some(Some(o)) = old.get(next_old)
+                && o.resolved.same_mask(r)
+                && !self.dirty.intersects(o.resolved.mask_domain())
+                && let Some(o) = old[next_old].take()
+            {
+                next_old += 1;
+                let Stage {
+                    binding: old_binding,
+                    written: old_written,
+                    ..
+                } = o;
+                let binding = LayerBinding::bind_masked(
+                    &r.layer.tool,
+                    old_binding.mask,
+                    &self.positions,
+                    rest.topology(),
+                )?;
+                let Recorded {
+                    saved,
+                    written,
+                    splits,
+                } = binding.apply_recorded(&r.layer, &mut self.positions)?;
+                if splits.is_some() {
+                    return Ok(None);
+                }
+                self.dirty
+                    .settle_written(&binding.mask.indices, &old_written, &written);
+                evaluated += 1;
+                self.stages.push(Stage {
+                    index: li,
+                    resolved: r.clone(),
+                    binding,
+                    saved,
+                    written,
+                });
+                continue;
+            }
             let binding = r.bind(
                 &self.positions,
                 rest.topology(),

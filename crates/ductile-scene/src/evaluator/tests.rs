@@ -593,6 +593,51 @@ fn a_rebound_layer_with_the_same_bind_is_refreshed_exactly() {
     }
 }
 
+/// A layer whose tool binds again (an FFSD point moved) while its influence and the input
+/// its mask reads are unchanged keeps its mask (the same allocation: the volume weights are
+/// not computed again), and the result is bit-identical to a fresh evaluation; a moved
+/// volume makes a new mask.
+#[test]
+fn a_rebound_tool_keeps_its_mask() {
+    let rest = rest();
+    let mut doc = scene();
+    // The volume on the tube's wall, so that both layers it limits hold vertices.
+    doc.node_mut("vol").unwrap().transform.translation = Vec3::new(0.7, 1.2, 0.0);
+    let mut ev = MeshEvaluator::new("m", rest.clone());
+    ev.update(&doc).unwrap();
+    let mask_of = |ev: &MeshEvaluator, layer: &str| {
+        let stage = ev
+            .stages
+            .iter()
+            .find(|s| s.resolved.layer.name == layer)
+            .expect("the layer has a stage");
+        Arc::clone(&stage.binding.mask)
+    };
+    for (step, layer) in ["wide", "dir", "wide"].into_iter().enumerate() {
+        let before = mask_of(&ev, layer);
+        assert!(!before.is_empty(), "{layer}: its volume holds vertices");
+        if let NodeKind::Tool(Tool::Ffsd(f)) = &mut doc.node_mut(layer).unwrap().kind {
+            f.points[0].position += Vec3::new(0.05, -0.03, 0.02) * (step + 1) as f32;
+        }
+        let binds = ev.binds();
+        let u = ev.update(&doc);
+        check_against_fresh(&ev, &u, &doc, &rest);
+        assert!(ev.binds() > binds, "{layer}: a moved point binds again");
+        assert!(
+            Arc::ptr_eq(&before, &mask_of(&ev, layer)),
+            "{layer}: the mask is kept"
+        );
+    }
+    let before = mask_of(&ev, "wide");
+    doc.node_mut("vol").unwrap().transform.translation += Vec3::new(0.2, 0.0, 0.0);
+    let u = ev.update(&doc);
+    check_against_fresh(&ev, &u, &doc, &rest);
+    assert!(
+        !Arc::ptr_eq(&before, &mask_of(&ev, "wide")),
+        "a moved volume makes a new mask"
+    );
+}
+
 /// A tool whose deformed state changes (a sketch bend's target, a curve's deformed control
 /// points, a lattice's control points) on an unchanged input keeps its binding — for the
 /// sketch tool its region of interest, skinning and Eq. 9 factorisation — and the result is
