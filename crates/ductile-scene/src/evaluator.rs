@@ -136,13 +136,6 @@ impl Resolved {
         )?)
     }
 
-    /// True when a binding made for `self` is valid for `other` on the same input: the same
-    /// layer, influence and area, and a tool with the same rest state
-    /// ([`Tool::same_rest_state`]); the tools' deformed states and the weights may differ.
-    fn same_rest(&self, other: &Resolved) -> bool {
-        self.same_mask(other) && self.layer.tool.same_rest_state(&other.layer.tool)
-    }
-
     /// True when the layer's mask on an input is the mask `other` has on the same input:
     /// the same layer, influence and area (the tools may differ).
     fn same_mask(&self, other: &Resolved) -> bool {
@@ -896,20 +889,37 @@ impl MeshEvaluator {
                 self.stages.push(stage);
                 continue;
             }
-            // The next old stage, when only its tool's deformed state (or the weight)
-            // changed and its input is unchanged: keep its binding, deform again.
+            // The next old stage of the same layer, when its influence and the input its
+            // mask reads are unchanged: its mask is still the mask on this input (the volume
+            // weights of a million vertices cost milliseconds). Its tool's bind is kept too
+            // when only the deformed state (or the weight) changed and nothing the tool
+            // reads changed; otherwise (a lattice's control points, an FFSD point) only the
+            // tool binds again, within that mask.
             if matched.is_none()
                 && let Some(Some(o)) = old.get(next_old)
-                && o.resolved.same_rest(r)
-                && !self.dirty.intersects(o.resolved.domain())
+                && o.resolved.same_mask(r)
+                && !self.dirty.intersects(o.resolved.mask_domain())
                 && let Some(o) = old[next_old].take()
             {
                 next_old += 1;
+                let keep = o.resolved.layer.tool.same_rest_state(&r.layer.tool)
+                    && !self.dirty.intersects(o.resolved.domain());
                 let Stage {
                     binding,
                     written: old_written,
                     ..
                 } = o;
+                let binding = if keep {
+                    binding
+                } else {
+                    self.binds += 1;
+                    LayerBinding::bind_masked(
+                        &r.layer.tool,
+                        binding.mask,
+                        &self.positions,
+                        rest.topology(),
+                    )?
+                };
                 let Recorded {
                     saved,
                     written,
@@ -931,48 +941,6 @@ impl MeshEvaluator {
                 continue;
             }
             self.binds += 1;
-            // The next old stage, when the layer's influence and the input its mask reads
-            // are unchanged but its tool's rest state changed (a lattice's control points,
-            // an FFSD point): its mask is still the mask on this input (the volume weights
-            // of a million vertices cost milliseconds); only the tool binds again.
-            if matched.is_none()
-                && let Some(Some(o)) = old.get(next_old)
-                && o.resolved.same_mask(r)
-                && !self.dirty.intersects(o.resolved.mask_domain())
-                && let Some(o) = old[next_old].take()
-            {
-                next_old += 1;
-                let Stage {
-                    binding: old_binding,
-                    written: old_written,
-                    ..
-                } = o;
-                let binding = LayerBinding::bind_masked(
-                    &r.layer.tool,
-                    old_binding.mask,
-                    &self.positions,
-                    rest.topology(),
-                )?;
-                let Recorded {
-                    saved,
-                    written,
-                    splits,
-                } = binding.apply_recorded(&r.layer, &mut self.positions)?;
-                if splits.is_some() {
-                    return Ok(None);
-                }
-                self.dirty
-                    .settle_written(&binding.mask.indices, &old_written, &written);
-                evaluated += 1;
-                self.stages.push(Stage {
-                    index: li,
-                    resolved: r.clone(),
-                    binding,
-                    saved,
-                    written,
-                });
-                continue;
-            }
             let binding = r.bind(
                 &self.positions,
                 rest.topology(),
