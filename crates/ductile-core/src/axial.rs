@@ -19,7 +19,7 @@ use glam::{Affine3A, Mat3, Quat, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::chunks::{BIND_CHUNK, bind_slots};
+use crate::chunks::{BIND_CHUNK, Reuse, bind_slots};
 use crate::curve::{CurveBasis, CurveEvaluator, validate_polygon};
 use crate::error::{CoreError, Result, check_finite};
 use crate::frames::{Frame, PolylineIndex, double_reflection, polyline_tangents};
@@ -285,6 +285,74 @@ impl AxialBind {
     }
 }
 
+impl AxialTool {
+    /// [`Deformer::bind`], copying the entry of every vertex that is not stale from
+    /// `previous`, a bind of a tool with the same rest state (see [`Reuse`]): a vertex's
+    /// segment, local coordinates and zone weight depend on its input alone. The same bits.
+    pub fn bind_reusing(
+        &self,
+        input: &BindInput<'_>,
+        previous: Option<Reuse<'_, AxialBind>>,
+    ) -> Result<AxialBind> {
+        let rest = SampledAxis::new(self.shape, &self.rest, None, "axial tool: rest axis")?;
+        let (slot, active) = bind_slots(input.positions.len(), input.active);
+        let m = active.len();
+        let mut bind = AxialBind {
+            slot,
+            segment: vec![0; m],
+            fraction: vec![0.0; m],
+            local: vec![Vec3::ZERO; m],
+            base: vec![Vec3::ZERO; m],
+            weight: vec![0.0; m],
+            rest,
+        };
+        let index =
+            PolylineIndex::new(bind.rest.points.clone()).ok_or_else(|| CoreError::Degenerate {
+                what: "axial tool: rest axis".to_owned(),
+                problem: "fewer than 2 samples".to_owned(),
+            })?;
+        let inv_r = 1.0 / self.radius;
+        // Every vertex on its own, in parallel chunks (the same bits as one by one).
+        let rest = &bind.rest;
+        bind.segment
+            .par_iter_mut()
+            .zip(bind.fraction.par_iter_mut())
+            .zip(bind.local.par_iter_mut())
+            .zip(bind.base.par_iter_mut())
+            .zip(bind.weight.par_iter_mut())
+            .zip(active.par_iter())
+            .with_min_len(BIND_CHUNK)
+            .for_each(|(((((segment, fraction), local), base), weight), &i)| {
+                if let Some((old, s)) =
+                    previous.and_then(|p| p.slot(&p.bind.slot, i).map(|s| (p.bind, s)))
+                {
+                    *segment = old.segment[s];
+                    *fraction = old.fraction[s];
+                    *local = old.local[s];
+                    *base = old.base[s];
+                    *weight = old.weight[s];
+                    return;
+                }
+                let u = input.positions[i as usize];
+                let (j, f, d2) = index.closest(u);
+                let w = self.falloff.weight(d2.sqrt() * inv_r, self.inner);
+                if w <= 0.0 {
+                    return;
+                }
+                let (a, m, rw, s) = rest.at_with_parts(j, f);
+                // M = R W S is a rotation times diag(1, s, s) with s > 0: M⁻¹ = S⁻¹ (R W)ᵀ.
+                let l = rw.transpose() * (u - a);
+                let l = Vec3::new(l.x, l.y / s, l.z / s);
+                *segment = j as u32;
+                *fraction = f;
+                *local = l;
+                *base = a + m * l;
+                *weight = w;
+            });
+        Ok(bind)
+    }
+}
+
 impl Deformer for AxialTool {
     type Bind = AxialBind;
 
@@ -360,52 +428,7 @@ impl Deformer for AxialTool {
     }
 
     fn bind(&self, input: &BindInput<'_>) -> Result<AxialBind> {
-        let rest = SampledAxis::new(self.shape, &self.rest, None, "axial tool: rest axis")?;
-        let (slot, active) = bind_slots(input.positions.len(), input.active);
-        let m = active.len();
-        let mut bind = AxialBind {
-            slot,
-            segment: vec![0; m],
-            fraction: vec![0.0; m],
-            local: vec![Vec3::ZERO; m],
-            base: vec![Vec3::ZERO; m],
-            weight: vec![0.0; m],
-            rest,
-        };
-        let index =
-            PolylineIndex::new(bind.rest.points.clone()).ok_or_else(|| CoreError::Degenerate {
-                what: "axial tool: rest axis".to_owned(),
-                problem: "fewer than 2 samples".to_owned(),
-            })?;
-        let inv_r = 1.0 / self.radius;
-        // Every vertex on its own, in parallel chunks (the same bits as one by one).
-        let rest = &bind.rest;
-        bind.segment
-            .par_iter_mut()
-            .zip(bind.fraction.par_iter_mut())
-            .zip(bind.local.par_iter_mut())
-            .zip(bind.base.par_iter_mut())
-            .zip(bind.weight.par_iter_mut())
-            .zip(active.par_iter())
-            .with_min_len(BIND_CHUNK)
-            .for_each(|(((((segment, fraction), local), base), weight), &i)| {
-                let u = input.positions[i as usize];
-                let (j, f, d2) = index.closest(u);
-                let w = self.falloff.weight(d2.sqrt() * inv_r, self.inner);
-                if w <= 0.0 {
-                    return;
-                }
-                let (a, m, rw, s) = rest.at_with_parts(j, f);
-                // M = R W S is a rotation times diag(1, s, s) with s > 0: M⁻¹ = S⁻¹ (R W)ᵀ.
-                let l = rw.transpose() * (u - a);
-                let l = Vec3::new(l.x, l.y / s, l.z / s);
-                *segment = j as u32;
-                *fraction = f;
-                *local = l;
-                *base = a + m * l;
-                *weight = w;
-            });
-        Ok(bind)
+        self.bind_reusing(input, None)
     }
 
     fn deform(&self, bind: &AxialBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {

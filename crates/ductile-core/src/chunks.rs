@@ -43,6 +43,51 @@ pub fn bind_slots(n: usize, active: &[u32]) -> (Vec<u32>, Vec<u32>) {
     (slot, list)
 }
 
+/// An earlier bind of the same tool (the same rest state) on an input that differs from the
+/// new one only at the `stale` vertices (`stale[v]`; a vertex past its end counts as stale).
+/// A tool whose per-vertex bind data is a function of that vertex's input alone (curves,
+/// axes, shape surfaces) copies the entry of a vertex that is not stale instead of computing
+/// it again: the same bits, without the closest-point search.
+#[derive(Debug)]
+pub struct Reuse<'a, B> {
+    /// The earlier bind.
+    pub bind: &'a B,
+    /// Per welded vertex, whether its input may differ from the one `bind` read.
+    pub stale: &'a [bool],
+}
+
+impl<B> Clone for Reuse<'_, B> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<B> Copy for Reuse<'_, B> {}
+
+impl<'a, B> Reuse<'a, B> {
+    /// The same stale vertices with another bind.
+    #[must_use]
+    pub fn with<C>(self, bind: &'a C) -> Reuse<'a, C> {
+        Reuse {
+            bind,
+            stale: self.stale,
+        }
+    }
+
+    /// The slot of vertex `i` in the earlier bind's compact arrays (`slot`, see
+    /// [`bind_slots`]) when its entry may be copied: `i` is not stale and had a slot.
+    #[must_use]
+    pub fn slot(&self, slot: &[u32], i: u32) -> Option<usize> {
+        if self.stale.get(i as usize).copied().unwrap_or(true) {
+            return None;
+        }
+        slot.get(i as usize)
+            .copied()
+            .filter(|&s| s != u32::MAX)
+            .map(|s| s as usize)
+    }
+}
+
 /// Calls `f(k, &mut values[indices[k]])` for every `k`. When `indices` has at least
 /// [`PARALLEL_COPY_THRESHOLD`] entries and is strictly ascending (as a [`Mask`]'s indices are), the
 /// calls run in parallel chunks of [`CHUNK`] entries, each owning a disjoint range of

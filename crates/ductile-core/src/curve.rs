@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all, bernstein_all_with_derivative};
-use crate::chunks::{BIND_CHUNK, bind_slots};
+use crate::chunks::{BIND_CHUNK, Reuse, bind_slots};
 use crate::curve_pieces::CurvePieces;
 use crate::error::{CoreError, Result, check_finite_vec3};
 use crate::frames::PolylineIndex;
@@ -351,6 +351,61 @@ impl CurveBind {
     }
 }
 
+impl CurveTool {
+    /// [`Deformer::bind`], copying the entry of every vertex that is not stale from
+    /// `previous`, a bind of a tool with the same rest state (see [`Reuse`]): a vertex's
+    /// parameter, offset and weights depend on its input alone. The same bits.
+    pub fn bind_reusing(
+        &self,
+        input: &BindInput<'_>,
+        previous: Option<Reuse<'_, CurveBind>>,
+    ) -> Result<CurveBind> {
+        let evaluator = CurveEvaluator::new(self.basis, self.rest.len(), "curve tool")?;
+        let pieces = CurvePieces::new(&evaluator, &self.rest);
+        let (slot, active) = bind_slots(input.positions.len(), input.active);
+        let m = active.len();
+        let stride = 2 * evaluator.degree() + 1;
+        let mut params = vec![0.0; m];
+        let mut offsets = vec![Vec3::ZERO; m];
+        let mut firsts = vec![0; m];
+        let mut weights = vec![0.0; m * stride];
+        let previous = previous.filter(|p| p.bind.evaluator.degree() == evaluator.degree());
+        // Every vertex on its own, in parallel chunks (the same bits as one by one).
+        params
+            .par_iter_mut()
+            .zip(offsets.par_iter_mut())
+            .zip(firsts.par_iter_mut())
+            .zip(weights.par_chunks_mut(stride))
+            .zip(active.par_iter())
+            .with_min_len(BIND_CHUNK)
+            .for_each(|((((param, offset), first), weights), &i)| {
+                if let Some((old, s)) =
+                    previous.and_then(|p| p.slot(&p.bind.slot, i).map(|s| (p.bind, s)))
+                {
+                    *param = old.params[s];
+                    *offset = old.offsets[s];
+                    *first = old.firsts[s];
+                    weights.copy_from_slice(&old.weights[s * stride..(s + 1) * stride]);
+                    return;
+                }
+                let x = input.positions[i as usize];
+                let (c, _) = pieces.closest(x);
+                *param = c.t;
+                *offset = x - c.point;
+                *first = pieces.first(c.piece) as u32;
+                pieces.weights(c.piece, c.u, weights);
+            });
+        Ok(CurveBind {
+            evaluator,
+            slot,
+            params,
+            offsets,
+            firsts,
+            weights,
+        })
+    }
+}
+
 impl Deformer for CurveTool {
     type Bind = CurveBind;
 
@@ -371,39 +426,7 @@ impl Deformer for CurveTool {
     }
 
     fn bind(&self, input: &BindInput<'_>) -> Result<CurveBind> {
-        let evaluator = CurveEvaluator::new(self.basis, self.rest.len(), "curve tool")?;
-        let pieces = CurvePieces::new(&evaluator, &self.rest);
-        let (slot, active) = bind_slots(input.positions.len(), input.active);
-        let m = active.len();
-        let stride = 2 * evaluator.degree() + 1;
-        let mut params = vec![0.0; m];
-        let mut offsets = vec![Vec3::ZERO; m];
-        let mut firsts = vec![0; m];
-        let mut weights = vec![0.0; m * stride];
-        // Every vertex on its own, in parallel chunks (the same bits as one by one).
-        params
-            .par_iter_mut()
-            .zip(offsets.par_iter_mut())
-            .zip(firsts.par_iter_mut())
-            .zip(weights.par_chunks_mut(stride))
-            .zip(active.par_iter())
-            .with_min_len(BIND_CHUNK)
-            .for_each(|((((param, offset), first), weights), &i)| {
-                let x = input.positions[i as usize];
-                let (c, _) = pieces.closest(x);
-                *param = c.t;
-                *offset = x - c.point;
-                *first = pieces.first(c.piece) as u32;
-                pieces.weights(c.piece, c.u, weights);
-            });
-        Ok(CurveBind {
-            evaluator,
-            slot,
-            params,
-            offsets,
-            firsts,
-            weights,
-        })
+        self.bind_reusing(input, None)
     }
 
     fn deform(&self, bind: &CurveBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {

@@ -300,16 +300,43 @@ impl Volume {
     }
 }
 
-/// The vertices `ids` (in range of `positions`) of positive `weight`, in order, with their
-/// weights. Generic over the iterator, so the loop compiles without a call per vertex.
+/// The vertices `ids` (ascending, in range of `positions`) of positive `weight`, in order,
+/// with their weights. Generic over the iterator, so the loop compiles without a call per
+/// vertex. With `reuse` (an earlier mask of the same influence and its stale vertices, see
+/// [`Influence::mask_reusing`]), a vertex that is not stale takes its earlier weight (0
+/// where it was not in that mask) without reading its position; `start` is at most the
+/// first id.
 fn gather(
     ids: impl Iterator<Item = u32>,
     positions: &[Vec3],
     weight: &impl Fn(Vec3) -> f32,
+    reuse: Option<(&Mask, &[bool])>,
+    start: u32,
 ) -> Mask {
     let mut mask = Mask::default();
+    let Some((old, stale)) = reuse else {
+        for i in ids {
+            let w = weight(positions[i as usize]);
+            if w > 0.0 {
+                mask.indices.push(i);
+                mask.weights.push(w);
+            }
+        }
+        return mask;
+    };
+    let mut j = old.indices.partition_point(|&x| x < start);
     for i in ids {
-        let w = weight(positions[i as usize]);
+        let w = if stale.get(i as usize).copied().unwrap_or(true) {
+            weight(positions[i as usize])
+        } else {
+            while old.indices.get(j).is_some_and(|&x| x < i) {
+                j += 1;
+            }
+            match old.indices.get(j) {
+                Some(&x) if x == i => old.weights[j],
+                _ => 0.0,
+            }
+        };
         if w > 0.0 {
             mask.indices.push(i);
             mask.weights.push(w);
@@ -391,6 +418,32 @@ impl Influence {
     /// for a caller that keeps the area's vertices elsewhere (shared between layers).
     #[must_use]
     pub fn mask_in(&self, area: Option<&[u32]>, positions: &[Vec3]) -> Mask {
+        self.mask_with(area, positions, None)
+    }
+
+    /// [`Influence::mask_in`] on `positions`, given `old`, this influence's mask (with the
+    /// same `area`) on earlier positions that differ from `positions` only at the `stale`
+    /// vertices (`stale[v]`; a vertex past its end counts as stale). A vertex's weight is a
+    /// function of its own position, so a vertex that is not stale keeps its old weight (or
+    /// stays out): only the stale ones are weighed again. The same bits as
+    /// [`Influence::mask_in`].
+    #[must_use]
+    pub fn mask_reusing(
+        &self,
+        area: Option<&[u32]>,
+        positions: &[Vec3],
+        old: &Mask,
+        stale: &[bool],
+    ) -> Mask {
+        self.mask_with(area, positions, Some((old, stale)))
+    }
+
+    fn mask_with(
+        &self,
+        area: Option<&[u32]>,
+        positions: &[Vec3],
+        reuse: Option<(&Mask, &[bool])>,
+    ) -> Mask {
         let n = positions.len();
         if self.volumes.is_empty() {
             // `g(v) = 1` everywhere: the mask is the area (or every vertex), weight 1.
@@ -423,8 +476,10 @@ impl Influence {
                     area.iter().copied().filter(|&i| (i as usize) < n),
                     positions,
                     &weight,
+                    reuse,
+                    0,
                 ),
-                None => gather(0..n as u32, positions, &weight),
+                None => gather(0..n as u32, positions, &weight, reuse, 0),
             };
         }
         // Chunks in parallel, each gathering its own part in order, then copied in order
@@ -437,6 +492,8 @@ impl Influence {
                         c.iter().copied().filter(|&i| (i as usize) < n),
                         positions,
                         &weight,
+                        reuse,
+                        c[0],
                     )
                 })
                 .collect(),
@@ -444,7 +501,8 @@ impl Influence {
                 .into_par_iter()
                 .map(|c| {
                     let end = ((c + 1) * CHUNK).min(n);
-                    gather((c * CHUNK) as u32..end as u32, positions, &weight)
+                    let start = (c * CHUNK) as u32;
+                    gather(start..end as u32, positions, &weight, reuse, start)
                 })
                 .collect(),
         };
@@ -678,6 +736,60 @@ mod tests {
             assert!(!expected.is_empty());
             let got: Vec<(u32, f32)> = m.indices.into_iter().zip(m.weights).collect();
             assert_eq!(got, expected);
+        }
+    }
+
+    /// A mask made from the mask on earlier positions weighs only the stale vertices again
+    /// and gives the bits of a fresh mask (vertices entering and leaving the volume
+    /// included), on both the one-thread and the parallel path; a moved vertex wrongly left
+    /// out of the stale set keeps its earlier weight.
+    #[test]
+    fn masks_reusing_an_earlier_mask_match_a_fresh_one() {
+        let vol = Volume::new(
+            Shape::Sphere { radius: 0.5 },
+            Affine3A::from_translation(Vec3::new(1.0, 0.4, 0.0)),
+            "v",
+        )
+        .unwrap();
+        for n in [3000, PARALLEL_THRESHOLD + 5000] {
+            let before: Vec<Vec3> = (0..n)
+                .map(|i| Vec3::new((i % 200) as f32 * 0.01, (i / 200) as f32 * 0.01, 0.0))
+                .collect();
+            let moved = |v: usize| v.is_multiple_of(7);
+            let after: Vec<Vec3> = (0..n)
+                .map(|v| {
+                    before[v]
+                        + if moved(v) {
+                            Vec3::new(0.13, -0.02, 0.05)
+                        } else {
+                            Vec3::ZERO
+                        }
+                })
+                .collect();
+            let stale: Vec<bool> = (0..n).map(moved).collect();
+            for (area, invert) in [
+                (None, false),
+                (None, true),
+                (
+                    Some((0..n as u32).filter(|v| v % 3 != 0).collect::<Vec<_>>()),
+                    false,
+                ),
+            ] {
+                let inf = Influence {
+                    volumes: vec![vol.clone()],
+                    area,
+                    falloff: Falloff::Smooth,
+                    inner: 0.2,
+                    invert,
+                };
+                let area = inf.area.as_deref();
+                let old = inf.mask_in(area, &before);
+                let fresh = inf.mask_in(area, &after);
+                assert_ne!(old, fresh);
+                assert_eq!(inf.mask_reusing(area, &after, &old, &stale), fresh, "{n}");
+                let lying = vec![false; n];
+                assert_eq!(inf.mask_reusing(area, &after, &old, &lying), old, "{n}");
+            }
         }
     }
 

@@ -16,7 +16,7 @@ use std::sync::Arc;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::chunks::{CHUNK, PARALLEL_THRESHOLD, for_each_at, gather_at, scatter_at};
+use crate::chunks::{CHUNK, PARALLEL_THRESHOLD, Reuse, for_each_at, gather_at, scatter_at};
 use crate::error::{CoreError, Result, check_finite};
 use crate::influence::{Influence, Mask};
 use crate::mesh::{Deformed, RestMesh, Topology};
@@ -104,14 +104,29 @@ impl LayerBinding {
         positions: &[Vec3],
         topology: &Topology,
     ) -> Result<Self> {
+        Self::bind_masked_reusing(tool, mask, positions, topology, None)
+    }
+
+    /// [`LayerBinding::bind_masked`], with the tool's per-vertex data of the vertices that
+    /// are not stale copied from `previous`, a binding of the same layer (see
+    /// [`Tool::bind_reusing`]). The same bits.
+    pub fn bind_masked_reusing(
+        tool: &Tool,
+        mask: Arc<Mask>,
+        positions: &[Vec3],
+        topology: &Topology,
+        previous: Option<Reuse<'_, LayerBinding>>,
+    ) -> Result<Self> {
         let bind = if mask.is_empty() {
             None
         } else {
-            Some(tool.bind(&BindInput {
+            let input = BindInput {
                 positions,
                 topology,
                 active: &mask.indices,
-            })?)
+            };
+            let previous = previous.and_then(|p| p.bind.bind.as_ref().map(|b| p.with(b)));
+            Some(tool.bind_reusing(&input, previous)?)
         };
         Ok(Self { mask, bind })
     }

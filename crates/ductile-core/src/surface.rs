@@ -19,7 +19,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE};
-use crate::chunks::{BIND_CHUNK, bind_slots};
+use crate::chunks::{BIND_CHUNK, Reuse, bind_slots};
 use crate::curve_pieces::BasisPieces;
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
 use crate::tool::{BindInput, Deformer};
@@ -285,12 +285,16 @@ struct Bound {
     span: (u32, u32),
 }
 
+/// Slot of an active vertex that does not project onto the surface (it stays where it is).
+const UNPROJECTED: u32 = u32::MAX - 1;
+
 /// Bind of a [`ShapeSurfaceTool`]: `(u₁, u₂, u₃)` per active vertex, in the order of the
-/// active list, and per welded vertex its slot (`u32::MAX` where it does not project).
+/// active list, and per welded vertex its slot (`u32::MAX` where it was not active,
+/// [`UNPROJECTED`] where it does not project).
 #[derive(Debug, Clone)]
 pub struct SurfaceBind {
     knots: [KnotVector; 2],
-    /// Slot of each welded vertex in `points` (`u32::MAX`: not bound or not projecting).
+    /// Slot of each welded vertex in `points` (`u32::MAX`: not active; [`UNPROJECTED`]).
     slot: Vec<u32>,
     points: Vec<Bound>,
     /// Per bound point, the basis values and derivatives at its `(u₁, u₂)`:
@@ -369,67 +373,16 @@ fn closest_point(
     (u, v, s)
 }
 
-impl Deformer for ShapeSurfaceTool {
-    type Bind = SurfaceBind;
-
-    fn validate(&self, what: &str) -> Result<()> {
-        check_finite_vec3(|| format!("{what}: origin"), self.frame.origin)?;
-        check_finite_vec3(|| format!("{what}: u_edge"), self.frame.u_edge)?;
-        check_finite_vec3(|| format!("{what}: v_edge"), self.frame.v_edge)?;
-        let n = self.frame.u_edge.cross(self.frame.v_edge);
-        let scale = self.frame.u_edge.length() * self.frame.v_edge.length();
-        if n.length().is_nan() || n.length() <= 1e-6 * scale {
-            return Err(CoreError::Degenerate {
-                what: what.to_string(),
-                problem: "the surface frame is degenerate: u_edge and v_edge must be non-zero \
-                          and not parallel"
-                    .into(),
-            });
-        }
-        if self.knots().is_none() {
-            return Err(CoreError::OutOfRange {
-                what: format!("{what}: counts / degree"),
-                value: f64::from(self.counts.0.min(self.counts.1)),
-                expected: "each degree must be in [1, 15] and each count greater than its degree",
-            });
-        }
-        let total = self.counts.0 as usize * self.counts.1 as usize;
-        if total > 1 << 16 {
-            return Err(CoreError::OutOfRange {
-                what: format!("{what}: number of control points"),
-                value: total as f64,
-                expected: "must be at most 65536",
-            });
-        }
-        let in_range = |at: (u32, u32)| at.0 < self.counts.0 && at.1 < self.counts.1;
-        for (list, name) in [(&self.rest, "rest"), (&self.moves, "moves")] {
-            let mut seen = std::collections::HashSet::new();
-            for (k, e) in list.iter().enumerate() {
-                let w = format!("{what}: {name} {k} at {:?}", e.at);
-                if !in_range(e.at) || !seen.insert(e.at) {
-                    return Err(CoreError::Degenerate {
-                        what: w,
-                        problem: "the index is outside the grid or edited twice".into(),
-                    });
-                }
-                check_finite_vec3(|| format!("{w}: offset"), e.offset)?;
-            }
-        }
-        let mut seen = std::collections::HashSet::new();
-        for (k, e) in self.heights.iter().enumerate() {
-            let w = format!("{what}: heights {k} at {:?}", e.at);
-            if !in_range(e.at) || !seen.insert(e.at) {
-                return Err(CoreError::Degenerate {
-                    what: w,
-                    problem: "the index is outside the grid or edited twice".into(),
-                });
-            }
-            check_finite(|| format!("{w}: height"), e.height)?;
-        }
-        Ok(())
-    }
-
-    fn bind(&self, input: &BindInput<'_>) -> Result<SurfaceBind> {
+impl ShapeSurfaceTool {
+    /// [`Deformer::bind`], copying the entry of every vertex that is not stale from
+    /// `previous`, a bind of a tool with the same rest state (see [`Reuse`]): a vertex's
+    /// `(u₁, u₂, u₃)`, frame and basis values, or that it does not project, depend on its
+    /// input alone. The same bits.
+    pub fn bind_reusing(
+        &self,
+        input: &BindInput<'_>,
+        previous: Option<Reuse<'_, SurfaceBind>>,
+    ) -> Result<SurfaceBind> {
         let knots = self.knots().ok_or_else(|| CoreError::OutOfRange {
             what: "shape surface: counts / degree".into(),
             value: f64::from(self.counts.0.min(self.counts.1)),
@@ -516,6 +469,7 @@ impl Deformer for ShapeSurfaceTool {
         let mut points = vec![unbound; m];
         let mut weights = vec![0.0; m * stride];
         let mut projects = vec![false; m];
+        let previous = previous.filter(|p| p.bind.knots == knots);
         points
             .par_iter_mut()
             .zip(weights.par_chunks_mut(stride))
@@ -523,6 +477,16 @@ impl Deformer for ShapeSurfaceTool {
             .zip(active.par_iter())
             .with_min_len(BIND_CHUNK)
             .for_each(|(((point, weights), projects), &i)| {
+                if let Some((old, s)) =
+                    previous.and_then(|p| p.slot(&p.bind.slot, i).map(|s| (p.bind, s)))
+                {
+                    if s != UNPROJECTED as usize {
+                        *point = old.points[s];
+                        *projects = true;
+                        weights.copy_from_slice(&old.weights[s * stride..(s + 1) * stride]);
+                    }
+                    return;
+                }
                 if let Some((b, bs)) = project(input.positions[i as usize]) {
                     *point = b;
                     *projects = true;
@@ -535,7 +499,7 @@ impl Deformer for ShapeSurfaceTool {
                 }
             });
         for (&i, _) in active.iter().zip(&projects).filter(|(_, p)| !**p) {
-            slot[i as usize] = u32::MAX;
+            slot[i as usize] = UNPROJECTED;
         }
         Ok(SurfaceBind {
             knots,
@@ -544,6 +508,71 @@ impl Deformer for ShapeSurfaceTool {
             weights,
             rest,
         })
+    }
+}
+
+impl Deformer for ShapeSurfaceTool {
+    type Bind = SurfaceBind;
+
+    fn validate(&self, what: &str) -> Result<()> {
+        check_finite_vec3(|| format!("{what}: origin"), self.frame.origin)?;
+        check_finite_vec3(|| format!("{what}: u_edge"), self.frame.u_edge)?;
+        check_finite_vec3(|| format!("{what}: v_edge"), self.frame.v_edge)?;
+        let n = self.frame.u_edge.cross(self.frame.v_edge);
+        let scale = self.frame.u_edge.length() * self.frame.v_edge.length();
+        if n.length().is_nan() || n.length() <= 1e-6 * scale {
+            return Err(CoreError::Degenerate {
+                what: what.to_string(),
+                problem: "the surface frame is degenerate: u_edge and v_edge must be non-zero \
+                          and not parallel"
+                    .into(),
+            });
+        }
+        if self.knots().is_none() {
+            return Err(CoreError::OutOfRange {
+                what: format!("{what}: counts / degree"),
+                value: f64::from(self.counts.0.min(self.counts.1)),
+                expected: "each degree must be in [1, 15] and each count greater than its degree",
+            });
+        }
+        let total = self.counts.0 as usize * self.counts.1 as usize;
+        if total > 1 << 16 {
+            return Err(CoreError::OutOfRange {
+                what: format!("{what}: number of control points"),
+                value: total as f64,
+                expected: "must be at most 65536",
+            });
+        }
+        let in_range = |at: (u32, u32)| at.0 < self.counts.0 && at.1 < self.counts.1;
+        for (list, name) in [(&self.rest, "rest"), (&self.moves, "moves")] {
+            let mut seen = std::collections::HashSet::new();
+            for (k, e) in list.iter().enumerate() {
+                let w = format!("{what}: {name} {k} at {:?}", e.at);
+                if !in_range(e.at) || !seen.insert(e.at) {
+                    return Err(CoreError::Degenerate {
+                        what: w,
+                        problem: "the index is outside the grid or edited twice".into(),
+                    });
+                }
+                check_finite_vec3(|| format!("{w}: offset"), e.offset)?;
+            }
+        }
+        let mut seen = std::collections::HashSet::new();
+        for (k, e) in self.heights.iter().enumerate() {
+            let w = format!("{what}: heights {k} at {:?}", e.at);
+            if !in_range(e.at) || !seen.insert(e.at) {
+                return Err(CoreError::Degenerate {
+                    what: w,
+                    problem: "the index is outside the grid or edited twice".into(),
+                });
+            }
+            check_finite(|| format!("{w}: height"), e.height)?;
+        }
+        Ok(())
+    }
+
+    fn bind(&self, input: &BindInput<'_>) -> Result<SurfaceBind> {
+        self.bind_reusing(input, None)
     }
 
     fn deform(&self, bind: &SurfaceBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {

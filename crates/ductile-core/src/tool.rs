@@ -15,6 +15,7 @@ use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::axial::{AxialBind, AxialTool};
+use crate::chunks::Reuse;
 use crate::curve::{CurveBind, CurveTool};
 use crate::direct_ffd::{DirectFfdBind, DirectFfdTool};
 use crate::dogme::{DogmeBind, DogmeTool};
@@ -175,6 +176,41 @@ impl Tool {
         })
     }
 
+    /// [`Tool::bind`], copying from `previous` (a bind of a tool with the same rest state)
+    /// the per-vertex data of every vertex that is not stale, where the tool's per-vertex
+    /// data depends on that vertex's input alone (curves, axes, shape surfaces; see
+    /// [`Reuse`]). The same bits as [`Tool::bind`]; the other kinds bind in full.
+    pub fn bind_reusing(
+        &self,
+        input: &BindInput<'_>,
+        previous: Option<Reuse<'_, ToolBind>>,
+    ) -> Result<ToolBind> {
+        Ok(match (self, previous.map(|p| (p, p.bind))) {
+            (Tool::Curve(t), Some((p, ToolBind::Curve(b)))) => {
+                ToolBind::Curve(t.bind_reusing(input, Some(p.with(b)))?)
+            }
+            (Tool::Axial(t), Some((p, ToolBind::Axial(b)))) => {
+                ToolBind::Axial(t.bind_reusing(input, Some(p.with(b)))?)
+            }
+            (Tool::ShapeSurface(t), Some((p, ToolBind::ShapeSurface(b)))) => {
+                ToolBind::ShapeSurface(Box::new(t.bind_reusing(input, Some(p.with(b.as_ref())))?))
+            }
+            _ => self.bind(input)?,
+        })
+    }
+
+    /// True when the tool's bind depends on the positions of no vertex (a lattice), or
+    /// holds per active vertex data that depends on that vertex's input alone (curves,
+    /// axes, shape surfaces): two binds of the same tool then agree on every vertex whose
+    /// input is the same, and so does the deformation of such a vertex.
+    #[must_use]
+    pub fn binds_per_vertex(&self) -> bool {
+        matches!(
+            self,
+            Tool::Lattice(_) | Tool::Curve(_) | Tool::Axial(_) | Tool::ShapeSurface(_)
+        )
+    }
+
     /// [`Tool::deform`] with the active vertices' input positions already gathered
     /// (`inputs[j]` is `positions[active[j]]`): FFSD reads them in order, the other tools
     /// read `positions` as usual. Same bits as [`Tool::deform`].
@@ -289,17 +325,17 @@ mod tests {
     use crate::mesh::RestMesh;
     use crate::surface::{ShapeSurfaceTool, SurfaceFrame};
 
-    /// The tools `is_identity` skips really are the identity, bit for bit, when bound and
-    /// deformed anyway (a bumpy sheet crossing each tool's region).
-    #[test]
-    fn tools_at_rest_deform_nothing_bit_for_bit() {
+    /// A bumpy sheet crossing the region of each tool of [`tools_at_rest`].
+    fn sheet() -> RestMesh {
         let mesh = crate::primitives::grid(40, 40, false, |r, c| {
             let (x, y) = (r as f32 / 13.0 - 1.5, c as f32 / 11.0 - 1.8);
             Vec3::new(x, y, 0.3 * (x * 3.1).sin() * (y * 2.3).cos() + 0.05)
         });
-        let rest = RestMesh::new(mesh, "sheet").unwrap();
-        let positions = rest.welded_positions();
-        let active: Vec<u32> = (0..positions.len() as u32).collect();
+        RestMesh::new(mesh, "sheet").unwrap()
+    }
+
+    /// Lattices, curves, axes and a shape surface around [`sheet`], at rest.
+    fn tools_at_rest() -> Vec<Tool> {
         let axis = |n: usize| -> Vec<Vec3> {
             (0..n)
                 .map(|i| Vec3::new(-1.2 + 2.4 * i as f32 / (n - 1) as f32, 0.1 * i as f32, 0.05))
@@ -332,7 +368,7 @@ mod tests {
             },
             (5, 4),
         );
-        let tools = [
+        vec![
             Tool::Lattice(LatticeTool::bernstein(frame, (3, 3, 3))),
             Tool::Lattice(bspline),
             Tool::Curve(CurveTool {
@@ -348,7 +384,17 @@ mod tests {
             Tool::Axial(AxialTool::new(points, 0.8)),
             Tool::Axial(axial_spline),
             Tool::ShapeSurface(surface),
-        ];
+        ]
+    }
+
+    /// The tools `is_identity` skips really are the identity, bit for bit, when bound and
+    /// deformed anyway (a bumpy sheet crossing each tool's region).
+    #[test]
+    fn tools_at_rest_deform_nothing_bit_for_bit() {
+        let rest = sheet();
+        let positions = rest.welded_positions();
+        let active: Vec<u32> = (0..positions.len() as u32).collect();
+        let tools = tools_at_rest();
         for tool in tools {
             assert!(tool.is_identity(), "{}", tool.kind_name());
             tool.validate("t").unwrap();
@@ -369,6 +415,88 @@ mod tests {
                     tool.kind_name()
                 );
             }
+        }
+    }
+
+    /// A bind made from an earlier one, on an input that moved at some vertices, deforms
+    /// like a fresh bind, bit for bit (the moved vertices are bound again, the others
+    /// copied, and the active set changed only at moved vertices); and it does copy: moved
+    /// vertices wrongly left out of the stale set keep their earlier entries.
+    #[test]
+    fn binds_reusing_an_earlier_bind_match_a_fresh_one() {
+        let rest = sheet();
+        let before = rest.welded_positions().to_vec();
+        let n = before.len() as u32;
+        let moved = |v: u32| v.is_multiple_of(7);
+        let after: Vec<Vec3> = (0..n)
+            .map(|v| {
+                before[v as usize]
+                    + if moved(v) {
+                        Vec3::new(0.03, -0.02, 0.05)
+                    } else {
+                        Vec3::ZERO
+                    }
+            })
+            .collect();
+        let stale: Vec<bool> = (0..n).map(moved).collect();
+        let old_active: Vec<u32> = (0..n).filter(|v| v % 5 != 1).collect();
+        let active: Vec<u32> = (0..n).filter(|&v| v % 5 != 1 || moved(v)).collect();
+        let input = |positions, active| BindInput {
+            positions,
+            topology: rest.topology(),
+            active,
+        };
+        let deform = |tool: &Tool, bind: &ToolBind, at: &[u32]| {
+            let mut out = vec![Vec3::ZERO; at.len()];
+            tool.deform(bind, &after, at, &mut out);
+            out.iter()
+                .map(|p| p.to_array().map(f32::to_bits))
+                .collect::<Vec<_>>()
+        };
+        for tool in tools_at_rest().into_iter().filter(Tool::binds_per_vertex) {
+            let tool = match tool {
+                Tool::Curve(mut t) => {
+                    t.deformed[2] += Vec3::new(0.0, 0.2, 0.3);
+                    Tool::Curve(t)
+                }
+                Tool::Axial(mut t) => {
+                    t.deformed[2].position += Vec3::new(0.0, 0.2, 0.3);
+                    t.deformed[3].twist = 0.5;
+                    Tool::Axial(t)
+                }
+                Tool::ShapeSurface(mut t) => {
+                    t.moves.push(crate::surface::SurfaceEdit {
+                        at: (2, 1),
+                        offset: Vec3::new(0.0, 0.1, 0.4),
+                    });
+                    Tool::ShapeSurface(t)
+                }
+                other => other,
+            };
+            let name = tool.kind_name();
+            let old = tool.bind(&input(&before, &old_active)).unwrap();
+            let fresh = tool.bind(&input(&after, &active)).unwrap();
+            let reuse = |stale| Some(Reuse { bind: &old, stale });
+            let reused = tool
+                .bind_reusing(&input(&after, &active), reuse(&stale))
+                .unwrap();
+            assert_eq!(
+                deform(&tool, &reused, &active),
+                deform(&tool, &fresh, &active),
+                "{name}"
+            );
+            if matches!(tool, Tool::Lattice(_)) {
+                continue;
+            }
+            // Every moved vertex active in both, claimed unchanged.
+            let lied: Vec<u32> = old_active.iter().copied().filter(|&v| moved(v)).collect();
+            let lying = vec![false; n as usize];
+            let copied = tool
+                .bind_reusing(&input(&after, &active), reuse(&lying))
+                .unwrap();
+            let got = deform(&tool, &copied, &lied);
+            assert_eq!(got, deform(&tool, &old, &lied), "{name}");
+            assert_ne!(got, deform(&tool, &fresh, &lied), "{name}");
         }
     }
 

@@ -19,9 +19,11 @@
 //! old ones at the same point of the stack (exact bitwise comparisons of `saved` and
 //! `written`; details in `docs/algorithms/evaluation.md`).
 //!
-//! A later FFSD layer that must be bound again but whose new bind has the same bits as the
-//! old one is *refreshed*: only its active vertices in `D` are deformed again, the others get
-//! their old output bits back.
+//! A later layer bound again because its input moved copies from its old binding what the
+//! moved vertices do not change: the volume weights of the other vertices, and the
+//! per-vertex binds of curve, axial and shape-surface tools. Such a layer, and an FFSD layer
+//! whose new bind has the same bits as the old one, is *refreshed*: only its active vertices
+//! in `D` are deformed again, the others get their old output bits back.
 //!
 //! A changed layer whose tool must be bound again (its rest state changed: a lattice's
 //! control points, an FFSD point) but whose influence, area and masked input are unchanged
@@ -48,7 +50,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::Vec3;
 
-use ductile_core::chunks::{CHUNK, PARALLEL_THRESHOLD, map_chunks_at, scatter_at};
+use ductile_core::chunks::{CHUNK, PARALLEL_THRESHOLD, Reuse, map_chunks_at, scatter_at};
 use ductile_core::influence::Mask;
 use ductile_core::mesh::{Deformed, RestMesh, Topology};
 use ductile_core::stack::{Layer, LayerBinding, Recorded, Stack};
@@ -102,14 +104,17 @@ impl Resolved {
     /// The layer's mask on `positions` (its input) and its tool's bind: what
     /// [`LayerBinding::bind`] gives for [`Resolved::full`], without copying the area twice.
     ///
-    /// `previous` is the mask of this layer on an earlier input: a mask that does not
-    /// depend on the input positions (no volumes: the area, or every vertex, with weight 1)
-    /// is shared from it when it covers the same vertex count.
+    /// `previous` is this layer's binding on an earlier input and the vertices where that
+    /// input may differ from `positions` (`D`). A mask that does not depend on the input
+    /// positions (no volumes: the area, or every vertex, with weight 1) is shared from it
+    /// when it covers the same vertex count; a volume mask weighs only the stale vertices
+    /// again ([`Influence::mask_reusing`]); the tool copies the per-vertex bind of the
+    /// others ([`LayerBinding::bind_masked_reusing`]). The same bits either way.
     fn bind(
         &self,
         positions: &[Vec3],
         topology: &Topology,
-        previous: Option<&Arc<Mask>>,
+        previous: Option<Reuse<'_, LayerBinding>>,
     ) -> Result<LayerBinding> {
         let n = positions.len();
         let fixed = self
@@ -121,18 +126,21 @@ impl Resolved {
             Some(_) => m.indices.last().is_none_or(|&i| (i as usize) < n),
             None => m.len() == n,
         };
-        let mask = match previous {
-            Some(m) if fixed && same_count(m) => Arc::clone(m),
-            _ => Arc::new(match &self.layer.influence {
-                Some(inf) => inf.mask_in(self.area.as_deref().map(Vec::as_slice), positions),
-                None => Mask::all(positions.len()),
-            }),
+        let area = self.area.as_deref().map(Vec::as_slice);
+        let mask = match (previous, &self.layer.influence) {
+            (Some(p), _) if fixed && same_count(&p.bind.mask) => Arc::clone(&p.bind.mask),
+            (Some(p), Some(inf)) if !fixed => {
+                Arc::new(inf.mask_reusing(area, positions, &p.bind.mask, p.stale))
+            }
+            (_, Some(inf)) => Arc::new(inf.mask_in(area, positions)),
+            (_, None) => Arc::new(Mask::all(n)),
         };
-        Ok(LayerBinding::bind_masked(
+        Ok(LayerBinding::bind_masked_reusing(
             &self.layer.tool,
             mask,
             positions,
             topology,
+            previous,
         )?)
     }
 
@@ -944,13 +952,29 @@ impl MeshEvaluator {
             let binding = r.bind(
                 &self.positions,
                 rest.topology(),
-                matched.as_ref().map(|s| &s.binding.mask),
+                matched.as_ref().map(|s| Reuse {
+                    bind: &s.binding,
+                    stale: &self.dirty.flag,
+                }),
             )?;
-            if let Some(mut stage) = matched.take_if(|o| same_binding(&o.binding, &binding)) {
-                refresh(&mut self.positions, &mut self.dirty, &mut stage, &r.layer)?;
+            // Deforming the vertices of `D` again costs more than a full application (which
+            // runs in parallel chunks) once they are half of the active ones.
+            let at = self.dirty.positions_in(&binding.mask.indices);
+            if let Some(old) = matched.take_if(|o| {
+                2 * at.len() < binding.mask.len()
+                    && agrees_per_vertex(&r.layer.tool, &o.binding, &binding)
+            }) {
+                let stage = refresh(
+                    &mut self.positions,
+                    &mut self.dirty,
+                    old,
+                    binding,
+                    &at,
+                    r,
+                    li,
+                )?;
                 evaluated += 1;
                 self.refreshed += 1;
-                stage.index = li;
                 self.stages.push(stage);
                 continue;
             }
@@ -1135,56 +1159,127 @@ impl MeshEvaluator {
     }
 }
 
-/// True when a stage bound again can be *refreshed* instead of applied in full: its tool
-/// deforms vertex by vertex (FFSD) and the new binding has the same bits as the old one
-/// (same mask, same weights, same prepared points). Every vertex whose input is unchanged
-/// then keeps its old output bits.
-fn same_binding(old: &LayerBinding, new: &LayerBinding) -> bool {
-    let same_bind = match (&old.bind, &new.bind) {
-        (Some(ToolBind::Ffsd(a)), Some(ToolBind::Ffsd(b))) => a.same_bits(b),
-        _ => false,
-    };
-    same_bind
-        && (Arc::ptr_eq(&old.mask, &new.mask)
-            || (old.mask.indices == new.mask.indices
-                && old
-                    .mask
-                    .weights
-                    .iter()
-                    .zip(&new.mask.weights)
-                    .all(|(a, b)| a.to_bits() == b.to_bits())))
+/// True when a layer bound again (`new`) agrees with its old binding (`old`) on every
+/// vertex whose input is unchanged: the same weight (a mask is a function of each vertex's
+/// input) and, for a tool that [binds per vertex](Tool::binds_per_vertex), the same
+/// per-vertex bind; an FFSD tool's bind depends on every active vertex, so it must have the
+/// same bits. Such a vertex then keeps its old output bits, and the stage can be
+/// [`refresh`]ed.
+fn agrees_per_vertex(tool: &Tool, old: &LayerBinding, new: &LayerBinding) -> bool {
+    tool.binds_per_vertex()
+        || match (&old.bind, &new.bind) {
+            (Some(ToolBind::Ffsd(a)), Some(ToolBind::Ffsd(b))) => a.same_bits(b),
+            _ => false,
+        }
 }
 
-/// Evaluates a matched stage whose binding is unchanged (see [`same_binding`]) on the
-/// current positions: a vertex outside `D` has the input it had before, so it gets its
-/// `written` bits back; only the active vertices in `D` are deformed again (with
-/// [`LayerBinding::apply_at`], the same arithmetic as a full application). Afterwards a
-/// vertex of `D` active here stays in `D` exactly when its new output differs from the old.
+/// Evaluates a matched stage `old` again with `binding`, which [agrees](agrees_per_vertex)
+/// with the old binding outside `D`, on the current positions (the stage's input): an active
+/// vertex outside `D` had the same input, so it gets its old `written` bits back; only the
+/// active vertices in `D` are deformed again (with [`LayerBinding::apply_at`], the same
+/// arithmetic as a full application). A vertex that left the mask (it is in `D`) keeps its
+/// input. Afterwards a vertex of `D` touched here stays in `D` exactly when its new output
+/// may differ from the old. `at` holds the positions in the new mask of its vertices in `D`,
+/// ascending.
 fn refresh(
     positions: &mut [Vec3],
     dirty: &mut Dirty,
-    stage: &mut Stage,
-    layer: &Layer,
-) -> Result<()> {
-    let at = dirty.positions_in(&stage.binding.mask.indices);
-    let indices = &stage.binding.mask.indices;
-    for &k in &at {
-        stage.saved[k as usize] = positions[indices[k as usize] as usize];
-    }
-    scatter_at(positions, indices, &stage.written);
-    for &k in &at {
-        positions[indices[k as usize] as usize] = stage.saved[k as usize];
-    }
-    stage.binding.apply_at(layer, positions, &at)?;
-    for &k in &at {
-        let v = indices[k as usize];
-        let new = positions[v as usize];
-        if same_bits(new, stage.written[k as usize]) {
-            dirty.remove(v);
+    old: Stage,
+    binding: LayerBinding,
+    at: &[u32],
+    resolved: &Resolved,
+    index: usize,
+) -> Result<Stage> {
+    let layer = &resolved.layer;
+    if Arc::ptr_eq(&old.binding.mask, &binding.mask) || old.indices() == binding.mask.indices {
+        // The same active vertices: the old records are updated in place.
+        let mut stage = Stage {
+            index,
+            resolved: resolved.clone(),
+            binding,
+            ..old
+        };
+        let indices = &stage.binding.mask.indices;
+        for &k in at {
+            stage.saved[k as usize] = positions[indices[k as usize] as usize];
         }
-        stage.written[k as usize] = new;
+        scatter_at(positions, indices, &stage.written);
+        for &k in at {
+            positions[indices[k as usize] as usize] = stage.saved[k as usize];
+        }
+        stage.binding.apply_at(layer, positions, at)?;
+        for &k in at {
+            let v = indices[k as usize];
+            let new = positions[v as usize];
+            if same_bits(new, stage.written[k as usize]) {
+                dirty.remove(v);
+            }
+            stage.written[k as usize] = new;
+        }
+        return Ok(stage);
     }
-    Ok(())
+    // The active vertices changed (only vertices of `D` enter or leave a mask): new records
+    // merged from the old ones, in the new mask's order.
+    let (new_idx, old_idx) = (&binding.mask.indices, old.indices());
+    let m = new_idx.len();
+    let (mut saved, mut written) = (Vec::with_capacity(m), Vec::with_capacity(m));
+    // The mask positions deformed again, and where each was in the old mask.
+    let (mut at, mut was) = (Vec::new(), Vec::new());
+    let mut j = 0;
+    let left = |v: u32, j: usize, dirty: &mut Dirty| {
+        // It left the mask: its output is now its input.
+        if same_bits(positions[v as usize], old.written[j]) {
+            dirty.remove(v);
+        } else {
+            dirty.insert(v);
+        }
+    };
+    for (k, &i) in new_idx.iter().enumerate() {
+        while j < old_idx.len() && old_idx[j] < i {
+            left(old_idx[j], j, dirty);
+            j += 1;
+        }
+        let in_old = old_idx.get(j) == Some(&i);
+        if in_old && !dirty.contains(i) {
+            saved.push(old.saved[j]);
+            written.push(old.written[j]);
+        } else {
+            let p = positions[i as usize];
+            saved.push(p);
+            written.push(p);
+            at.push(k as u32);
+            was.push(in_old.then_some(j));
+        }
+        j += usize::from(in_old);
+    }
+    for (j, &v) in old_idx.iter().enumerate().skip(j) {
+        left(v, j, dirty);
+    }
+    scatter_at(positions, new_idx, &written);
+    binding.apply_at(layer, positions, &at)?;
+    for (&k, was) in at.iter().zip(was) {
+        let (k, v) = (k as usize, new_idx[k as usize]);
+        let new = positions[v as usize];
+        written[k] = new;
+        // The old output: the old record's, or (not active before) the old input, which is
+        // the current one outside `D` and unknown inside.
+        let before = match was {
+            Some(j) => Some(old.written[j]),
+            None if !dirty.contains(v) => Some(saved[k]),
+            None => None,
+        };
+        match before {
+            Some(b) if same_bits(new, b) => dirty.remove(v),
+            _ => dirty.insert(v),
+        }
+    }
+    Ok(Stage {
+        index,
+        resolved: resolved.clone(),
+        binding,
+        saved,
+        written,
+    })
 }
 
 /// Indices of the non-inert layers.

@@ -808,3 +808,112 @@ fn kept_stages_follow_their_layers_when_inert_layers_move() {
         }
     }
 }
+
+/// Layers above a changed layer whose tools bind per vertex (curve, axis, shape surface,
+/// lattice), limited by a volume the changed layer moves vertices into and out of, are
+/// refreshed: only the moved vertices are weighed, bound and deformed again, and the result
+/// is bit-identical to a fresh evaluation.
+#[test]
+fn layers_above_a_change_are_refreshed_on_the_moved_vertices() {
+    use ductile_core::axial::{AxialTool, AxisPoint};
+    use ductile_core::curve::{CurveBasis, CurveTool};
+    use ductile_core::lattice::{ControlEdit, LatticeFrame, LatticeTool};
+    use ductile_core::surface::{ShapeSurfaceTool, SurfaceEdit, SurfaceFrame};
+
+    let rest = rest();
+    let mut doc = scene();
+    let axis: Vec<AxisPoint> = [2.0, 2.6, 3.2]
+        .map(|y| AxisPoint {
+            position: Vec3::new(0.0, y, 1.0),
+            twist: 0.0,
+            scale: 1.0,
+        })
+        .to_vec();
+    let mut axial = AxialTool::new(axis, 0.8);
+    axial.deformed[1].position += Vec3::new(0.1, 0.0, 0.1);
+    let curve_rest = vec![
+        Vec3::new(-1.0, 2.6, 1.0),
+        Vec3::new(0.0, 2.6, 1.2),
+        Vec3::new(1.0, 2.6, 1.0),
+    ];
+    let mut curve = CurveTool::new(CurveBasis::Bezier, curve_rest);
+    curve.deformed[1] += Vec3::new(0.0, 0.2, 0.1);
+    let mut surface = ShapeSurfaceTool::planar(
+        SurfaceFrame {
+            origin: Vec3::new(-1.0, 2.0, 1.0),
+            u_edge: Vec3::new(2.0, 0.0, 0.0),
+            v_edge: Vec3::new(0.0, 1.2, 0.0),
+        },
+        (4, 4),
+    );
+    surface.moves.push(SurfaceEdit {
+        at: (1, 1),
+        offset: Vec3::new(0.0, 0.0, 0.3),
+    });
+    let mut lattice = LatticeTool::bernstein(
+        LatticeFrame {
+            origin: Vec3::new(-1.2, 1.8, -0.2),
+            s: Vec3::new(2.4, 0.0, 0.0),
+            t: Vec3::new(0.0, 1.4, 0.0),
+            u: Vec3::new(0.0, 0.0, 1.6),
+        },
+        (3, 3, 3),
+    );
+    lattice.points.push(ControlEdit {
+        at: (1, 2, 1),
+        offset: Vec3::new(0.1, 0.2, 0.0),
+        weight: 1.0,
+    });
+    let above = ["crv", "ax", "srf", "lat"];
+    for (name, tool) in above.into_iter().zip([
+        Tool::Curve(curve),
+        Tool::Axial(axial),
+        Tool::ShapeSurface(surface),
+        Tool::Lattice(lattice),
+    ]) {
+        doc.nodes.push(node(name, Some("m"), NodeKind::Tool(tool)));
+    }
+    let mut vol = node(
+        "vol2",
+        Some("m"),
+        NodeKind::Volume(VolumeNode {
+            shape: Shape::Sphere { radius: 1.2 },
+        }),
+    );
+    vol.transform.translation = Vec3::new(0.0, 1.6, 1.0);
+    doc.nodes.push(vol);
+    let mut stack = vec![with_area("mac", "top")];
+    stack.extend(above.map(|name| LayerSpec {
+        influence: Some(InfluenceSpec {
+            volumes: vec!["vol2".to_owned()],
+            falloff: Falloff::Smooth,
+            inner: 0.2,
+            ..InfluenceSpec::default()
+        }),
+        ..LayerSpec::new(name)
+    }));
+    doc.mesh_mut("m").unwrap().stack = stack;
+    let mut ev = MeshEvaluator::new("m", rest.clone());
+    ev.update(&doc).unwrap();
+    let mask_len = |ev: &MeshEvaluator| {
+        ev.stages
+            .iter()
+            .find(|s| s.resolved.layer.name == "crv")
+            .map_or(0, |s| s.indices().len())
+    };
+    let mut lens = vec![mask_len(&ev)];
+    for value in [-0.9, 0.9, 0.3, 0.0, 0.6] {
+        if let NodeKind::Macro(m) = &mut doc.node_mut("mac").unwrap().kind {
+            m.value = value;
+        }
+        let before = ev.refreshed;
+        let u = ev.update(&doc);
+        check_against_fresh(&ev, &u, &doc, &rest);
+        assert_eq!(ev.refreshed, before + above.len(), "{value}: {u:?}");
+        lens.push(mask_len(&ev));
+    }
+    assert!(
+        lens.windows(2).any(|w| w[0] != w[1]),
+        "vertices enter and leave the volume: {lens:?}"
+    );
+}
