@@ -73,7 +73,8 @@ impl Shard {
     /// `var`: a Kubernetes Indexed Job (`JOB_COMPLETION_INDEX`, with the count in
     /// [`SHARD_COUNT_VAR`]) or a Slurm job array (`SLURM_ARRAY_TASK_ID`,
     /// `SLURM_ARRAY_TASK_COUNT`, and `SLURM_ARRAY_TASK_MIN` / `SLURM_ARRAY_TASK_STEP` when
-    /// the array does not start at 0 or has a step).
+    /// the array does not start at 0 or has a step; or, with [`SHARD_COUNT_VAR`] set, the
+    /// task id as the shard index, so that a task resubmitted alone keeps its shard).
     pub fn from_env(var: impl Fn(&str) -> Option<String>) -> anyhow::Result<Self> {
         let number =
             |name: &str| -> anyhow::Result<Option<usize>> {
@@ -94,6 +95,18 @@ impl Shard {
             return Self::new(index, count).context("--shard auto (Kubernetes Indexed Job)");
         }
         if let Some(id) = number("SLURM_ARRAY_TASK_ID")? {
+            // With the count given, the task ids are the shard indices (`--array=0-N−1`),
+            // so that one task resubmitted alone (`sbatch --array=17`, an array of one task)
+            // still takes its own shard and not every input.
+            if let Some(count) = number(SHARD_COUNT_VAR)? {
+                return Self::new(id, count).with_context(|| {
+                    format!(
+                        "--shard auto (Slurm job array with {SHARD_COUNT_VAR}: the task ids \
+                         are the shard indices 0 to {})",
+                        count.saturating_sub(1)
+                    )
+                });
+            }
             let count = number("SLURM_ARRAY_TASK_COUNT")?.context(
                 "--shard auto: SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not",
             )?;
@@ -104,6 +117,14 @@ impl Shard {
                     "--shard auto: SLURM_ARRAY_TASK_ID={id} is not in the array {min}, {}, … \
                      (SLURM_ARRAY_TASK_MIN, SLURM_ARRAY_TASK_STEP)",
                     min + step
+                );
+            }
+            if count == 1 && id != 0 {
+                bail!(
+                    "--shard auto: SLURM_ARRAY_TASK_ID={id} is the only task of its array: if it \
+                     is one shard of a larger batch resubmitted alone, set {SHARD_COUNT_VAR} to \
+                     the number of shards (else it would take every input); use --array=0 for a \
+                     batch of one shard"
                 );
             }
             return Self::new((id - min) / step, count).context("--shard auto (Slurm job array)");
@@ -491,6 +512,28 @@ mod tests {
         );
         assert!(Shard::from_env(env(&[])).is_err());
         assert!(Shard::from_env(env(&[("SLURM_ARRAY_TASK_ID", "3")])).is_err());
+        // Task 17 of 500 resubmitted alone (`sbatch --array=17`): an array of one task.
+        let alone = [
+            ("SLURM_ARRAY_TASK_ID", "17"),
+            ("SLURM_ARRAY_TASK_COUNT", "1"),
+            ("SLURM_ARRAY_TASK_MIN", "17"),
+        ];
+        let e = Shard::from_env(env(&alone)).unwrap_err();
+        assert!(format!("{e:#}").contains(SHARD_COUNT_VAR), "{e:#}");
+        let mut counted = alone.to_vec();
+        counted.push((SHARD_COUNT_VAR, "500"));
+        assert_eq!(
+            Shard::from_env(env(&counted)).unwrap(),
+            Shard::new(17, 500).unwrap()
+        );
+        counted[0].1 = "500";
+        assert!(Shard::from_env(env(&counted)).is_err(), "ids are 0 to 499");
+        // A batch of one shard.
+        let one = [
+            ("SLURM_ARRAY_TASK_ID", "0"),
+            ("SLURM_ARRAY_TASK_COUNT", "1"),
+        ];
+        assert_eq!(Shard::from_env(env(&one)).unwrap(), Shard::ALL);
     }
 
     #[test]

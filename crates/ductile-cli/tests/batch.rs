@@ -29,7 +29,7 @@ fn grid_obj(n: usize, z: f32) -> String {
     s
 }
 
-/// A scene whose one mesh, "plate", is pulled up in its middle by an FFSD point limited to a
+/// A scene whose one mesh, "plate", is pushed in its middle by an FFSD point limited to a
 /// region area and a sphere volume; with `vertex_area`, also a layer limited to an area given
 /// by vertex indices.
 fn scene(dir: &Path, vertex_area: bool) -> PathBuf {
@@ -127,7 +127,7 @@ fn a_batch_writes_what_a_single_apply_writes() {
     let single = dir.path().join("single.glb");
     let (code, _, err) = ductile(&["apply", s(&scene), "-o", s(&single)]);
     assert_eq!(code, 0, "{err}");
-    inputs(dir.path(), 3, 15);
+    let ins = inputs(dir.path(), 3, 15);
     let out = dir.path().join("out");
     let glob = format!("{}/in/*.obj", dir.path().display());
     let (code, stdout, err) = ductile(&[
@@ -154,7 +154,22 @@ fn a_batch_writes_what_a_single_apply_writes() {
     );
     // The scene's own mesh through the batch: the same bytes as `ductile apply`.
     assert_eq!(written["plate.glb"], std::fs::read(&single).unwrap());
-    // Another mesh is deformed too (its region area and volume carried over).
+    // Another mesh is deformed too (its region area and volume carried over): the vertices
+    // of m00 (a 15 × 15 grid over the unit square) inside the area and the ball move, the
+    // others stay.
+    let load = |p: &Path| ductile_io::load_mesh(&ductile_io::MeshRef::parse(s(p))).unwrap();
+    let (before, after) = (load(&ins[0]), load(&out.join("m00.glb")));
+    assert_eq!(before.positions.len(), after.positions.len());
+    let centre = glam::Vec3::new(0.5, 0.5, 0.0);
+    let mut moved = 0;
+    for (a, b) in before.positions.iter().zip(&after.positions) {
+        if a.distance(centre) > 0.45 {
+            assert_eq!(a, b, "outside the ball nothing moves");
+        } else if (b.z - a.z).abs() > 1e-4 {
+            moved += 1;
+        }
+    }
+    assert!(moved > 10, "{moved} vertices of m00 moved");
     let (code, _, err) = ductile(&["apply", s(&scene), "--input", &glob, "--out-dir", s(&out)]);
     assert_eq!(code, 0, "{err}");
     assert_eq!(
