@@ -48,6 +48,21 @@ impl SplineControl {
         }
     }
 
+    /// The control of `count` values (at least 2) and degree `degree` (clamped to
+    /// `1..=count − 1`) whose values are this control's `F` at the new control's Greville
+    /// abscissae `sᵢ = (t_{i+1} + … + t_{i+p}) / p`: how the Studio adds or removes a value
+    /// or changes the degree. A linear `F` (the identity, a constant) is kept exactly (a
+    /// B-spline with its values at the Greville abscissae reproduces linear functions); any
+    /// other `F` is approximated by one through its samples, so its shape is kept.
+    #[must_use]
+    pub fn resampled(&self, count: usize, degree: usize) -> Self {
+        let mut out = Self::identity(count.max(2), degree);
+        for v in &mut out.values {
+            *v = self.eval(*v);
+        }
+        out
+    }
+
     fn knots(&self) -> Option<KnotVector> {
         let degree = self.degree.min(self.values.len().saturating_sub(1)).max(1);
         KnotVector::clamped_uniform(degree, self.values.len())
@@ -82,5 +97,40 @@ impl SplineControl {
         let span = k.basis(s.clamp(0.0, 1.0), &mut basis);
         let p = k.degree();
         (0..=p).map(|r| basis[r] * self.values[span - p + r]).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resampling_keeps_linear_functions_and_the_shape_of_others() {
+        let max_gap = |a: &SplineControl, b: &SplineControl| {
+            (0..=100)
+                .map(|k| (a.eval(k as f32 / 100.0) - b.eval(k as f32 / 100.0)).abs())
+                .fold(0.0_f32, f32::max)
+        };
+        let identity = SplineControl::identity(5, 3);
+        for (count, degree) in [(2, 1), (3, 2), (6, 3), (9, 2), (4, 7)] {
+            let r = identity.resampled(count, degree);
+            assert_eq!(r.values.len(), count);
+            assert_eq!(r.degree, degree.min(count - 1));
+            assert!(max_gap(&identity, &r) < 1e-5, "{count} {degree}");
+            let c = SplineControl::constant(0.7).resampled(count, degree);
+            assert!(c.values.iter().all(|&v| (v - 0.7).abs() < 1e-6), "{c:?}");
+        }
+        // A bump keeps its shape when a value is added (not exactly: within a few percent
+        // of its height), and its peak stays in the middle.
+        let bump = SplineControl {
+            values: vec![0.0, 0.0, 1.0, 0.0, 0.0],
+            degree: 3,
+        };
+        let more = bump.resampled(6, 3);
+        assert!(max_gap(&bump, &more) < 0.15, "{more:?}");
+        let at = |f: &SplineControl, s: f32| f.eval(s);
+        assert!(at(&more, 0.5) > at(&more, 0.2) && at(&more, 0.5) > at(&more, 0.8));
+        // One value is refused by `validate`, never produced.
+        assert_eq!(bump.resampled(1, 3).values.len(), 2);
     }
 }

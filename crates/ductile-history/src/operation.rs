@@ -676,6 +676,14 @@ impl Operation {
             (O::Group { ops: a, .. }, O::Group { ops: b, .. }) => {
                 a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.can_merge(y))
             }
+            // An edit of a tool just added, in the same gesture (the Studio's "Adjust last
+            // operation" panel), is folded into the step that added it.
+            (O::AddNode { node, .. }, O::SetTool { node: b, old, .. }) => {
+                node.name == *b && matches!(&node.kind, NodeKind::Tool(t) if t == old)
+            }
+            (O::Group { ops, .. }, next @ O::SetTool { .. }) => {
+                ops.iter().any(|o| o.can_merge(next))
+            }
             _ => false,
         }
     }
@@ -707,6 +715,14 @@ impl Operation {
             (O::Group { ops, .. }, O::Group { ops: n, .. }) => {
                 for (a, b) in ops.iter_mut().zip(n) {
                     a.merge(b);
+                }
+            }
+            (O::AddNode { node, .. }, O::SetTool { new: n, .. }) => {
+                node.kind = NodeKind::Tool(n.clone());
+            }
+            (O::Group { ops, .. }, next @ O::SetTool { .. }) => {
+                if let Some(o) = ops.iter_mut().find(|o| o.can_merge(next)) {
+                    o.merge(next);
                 }
             }
             _ => return false,
@@ -1225,6 +1241,51 @@ mod tests {
             ops: vec![macro_value("a", 0.4, 0.5)],
         };
         assert!(!g.can_merge(&shorter));
+    }
+
+    #[test]
+    fn an_edit_of_a_tool_just_added_folds_into_the_add() {
+        use ductile_core::lattice::{LatticeFrame, LatticeTool};
+        let frame = LatticeFrame {
+            origin: glam::Vec3::ZERO,
+            s: glam::Vec3::X,
+            t: glam::Vec3::Y,
+            u: glam::Vec3::Z,
+        };
+        let small = Tool::Lattice(LatticeTool::bernstein(frame, (3, 3, 3)));
+        let large = Tool::Lattice(LatticeTool::bernstein(frame, (5, 4, 3)));
+        let node = |tool: &Tool| Node {
+            name: "lattice".into(),
+            parent: Some("m".into()),
+            transform: Transform::IDENTITY,
+            kind: NodeKind::Tool(tool.clone()),
+        };
+        let add = |tool: &Tool| Operation::Group {
+            label: "add lattice".into(),
+            ops: vec![
+                Operation::AddNode {
+                    index: 1,
+                    node: node(tool),
+                },
+                Operation::add_layer("m", 0, LayerSpec::new("lattice")),
+            ],
+        };
+        let resize = |old: &Tool, new: &Tool| Operation::SetTool {
+            node: "lattice".into(),
+            old: old.clone(),
+            new: new.clone(),
+        };
+        let mut step = add(&small);
+        assert!(step.merge(&resize(&small, &large)));
+        assert_eq!(step, add(&large));
+        // Only a continuous edit of that very node.
+        assert!(!step.can_merge(&resize(&small, &large)), "not continuous");
+        let mut other = resize(&large, &small);
+        if let Operation::SetTool { node, .. } = &mut other {
+            *node = "other".into();
+        }
+        assert!(!step.can_merge(&other), "another node");
+        assert!(!resize(&small, &large).can_merge(&add(&small)));
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! Adding nodes from the Add menu and Shift+A: the new tool or volume is placed around the
-//! mesh in focus (its current deformed shape; the surface point under the cursor for Shift+A,
-//! else the mesh's front — `ductile_scene::create`), gets a unique name, is parented to the
+//! mesh in focus (its current deformed shape), or around the selected layer's area when a
+//! layer acting on part of the mesh is selected (the surface point under the cursor for
+//! Shift+A, else the mesh's front — `ductile_scene::create`), gets a unique name, is parented to the
 //! mesh and gets a layer on top of its stack (a volume masks the selected layer instead), all
 //! as one undo step.
 
@@ -32,6 +33,29 @@ fn current_positions(ev: &MeshEvaluation) -> Vec<Vec3> {
         Some(d) if d.refined.is_none() => d.positions.clone(),
         _ => ev.rest().mesh().positions.clone(),
     }
+}
+
+/// The current positions of the stored vertices the selected layer acts on (weight above 0
+/// on its input), when a layer of mesh `mesh` is selected and it acts on some but not all of
+/// them: the "selected area" a new tool is placed around.
+fn selected_area(
+    selection: &Selection,
+    mesh: &str,
+    ev: &MeshEvaluation,
+    positions: &[Vec3],
+) -> Option<Vec<Vec3>> {
+    let (m, k) = selection.layer.as_ref()?;
+    if m != mesh {
+        return None;
+    }
+    let weights = ev.evaluator()?.layer_weights(*k)?;
+    let area: Vec<Vec3> = weights
+        .iter()
+        .zip(positions)
+        .filter(|(w, _)| **w > 0.0)
+        .map(|(_, p)| *p)
+        .collect();
+    (!area.is_empty() && area.len() < positions.len()).then_some(area)
 }
 
 /// A new node's step: the operation (one undo step), the node's name, and the layer that
@@ -102,6 +126,7 @@ pub fn add_nodes(
     mut sketch: ResMut<SketchState>,
     mut edits: MessageWriter<DocumentCommand>,
     mut notices: ResMut<Notices>,
+    mut gestures: ResMut<crate::panels::Gestures>,
     mut ray_cast: MeshRayCast,
     cameras: Query<(&Camera, &GlobalTransform), With<Camera3d>>,
     meshes: Query<(Entity, &SceneNode, &MeshEvaluation, &GlobalTransform)>,
@@ -140,9 +165,19 @@ pub fn add_nodes(
             continue;
         };
         let positions = current_positions(ev);
-        let Some(mut place) = Placement::around(&positions) else {
+        // The selected layer's area on this mesh (the vertices it acts on), when it is not
+        // the whole mesh: the new node fits it instead of the mesh's bounds.
+        let area = selected_area(&selection, &mesh, ev, &positions);
+        let Some(mut place) = Placement::around(area.as_deref().unwrap_or(&positions)) else {
             continue;
         };
+        if area.is_some()
+            && let Some((_, k)) = &selection.layer
+        {
+            notices.0.push(format!(
+                "Add: placed around the area of layer {k} (select no layer to use the whole mesh)"
+            ));
+        }
         // The surface point: under the cursor (Shift+A), else the mesh's front.
         let to_local = at.affine().inverse();
         let under_cursor = request.cursor.and_then(|cursor| {
@@ -169,7 +204,13 @@ pub fn add_nodes(
         });
         match add_operation(document, &selection, &mesh, request.request, &place) {
             Ok(Some(added)) => {
-                edits.write(DocumentCommand::apply(added.op));
+                // In a gesture of its own, which the "Adjust last operation" panel continues
+                // (a lattice's resolution chosen right after adding it, in the same step).
+                edits.write(DocumentCommand::Apply {
+                    op: Box::new(added.op),
+                    label: String::new(),
+                    gesture: Some(gestures.fresh()),
+                });
                 selection.select(Some(added.name));
                 selection.layer = added.layer;
             }

@@ -38,6 +38,7 @@ pub struct PanelState {
     add_popup: AddPopup,
     timeline: TimelinePanel,
     key_offer: crate::panels::key_offer::KeyOffer,
+    adjust_last: crate::panels::adjust_last::AdjustLast,
     variants: VariantsPanel,
     frame_ms: Option<f64>,
 }
@@ -59,6 +60,7 @@ pub struct UiInputs<'w, 's> {
     box_select: Res<'w, crate::box_select::BoxSelect>,
     export: Res<'w, crate::files::ExportJob>,
     evaluations: Query<'w, 's, &'static MeshEvaluation>,
+    meshes: Query<'w, 's, (&'static SceneNode, &'static MeshEvaluation)>,
 }
 
 /// What the UI writes besides its own state.
@@ -147,6 +149,11 @@ pub fn studio_ui(
             .layer_id(egui::LayerId::background())
             .max_rect(ctx.viewport_rect()),
     );
+    let meshes: Vec<_> = inputs
+        .meshes
+        .iter()
+        .map(|(node, ev)| (node.name.clone(), ev.rest().clone()))
+        .collect();
     let mut cx = PanelContext {
         doc: &inputs.doc,
         selection: &mut selection,
@@ -154,6 +161,7 @@ pub fn studio_ui(
         requests: Vec::new(),
         gestures: &mut gestures,
         now: inputs.time.elapsed_secs_f64(),
+        meshes: &meshes,
     };
     let has_selection = cx.selection.node.is_some();
     let has_mesh = !inputs.doc.shown().mesh_names().is_empty();
@@ -248,6 +256,8 @@ pub fn studio_ui(
     let free = egui::Rect::from_min_max(min, max).intersect(screen);
     // The offer to key an edit of animated fields, over the bottom of the view.
     panels.key_offer.show(&ctx, free, &mut cx);
+    // The resolution of a lattice just added ("Adjust last operation"), at its bottom left.
+    panels.adjust_last.show(&ctx, free, &mut cx);
 
     if let Some(a) = dialogs.show(&ctx) {
         actions.write(a);

@@ -116,6 +116,49 @@ pub fn curve_editor(
     response
 }
 
+/// The most control values a spline control gets from the Studio.
+pub const MAX_VALUES: usize = 32;
+
+/// The structure of spline control `f` beside its editor: how many control values (− / +)
+/// and the degree. A change resamples `F(s)` at the new control values' abscissae
+/// ([`SplineControl::resampled`]): a linear `F` is kept exactly, another keeps its shape.
+/// Returns true when `f` changed.
+pub fn spline_structure(ui: &mut egui::Ui, f: &mut SplineControl) -> bool {
+    let n = f.values.len();
+    let mut count = n;
+    let shown = f.degree.clamp(1, n.saturating_sub(1).max(1));
+    let mut degree = shown;
+    ui.horizontal(|ui| {
+        ui.label(format!("{n} values"));
+        if ui
+            .add_enabled(n > 2, egui::Button::new("−").small())
+            .on_hover_text("one control value less (F(s) resampled)")
+            .clicked()
+        {
+            count = n - 1;
+        }
+        if ui
+            .add_enabled(n < MAX_VALUES, egui::Button::new("+").small())
+            .on_hover_text("one control value more (F(s) resampled)")
+            .clicked()
+        {
+            count = n + 1;
+        }
+        ui.add(
+            egui::DragValue::new(&mut degree)
+                .range(1..=n.saturating_sub(1).clamp(1, 15))
+                .speed(0.05)
+                .prefix("degree "),
+        )
+        .on_hover_text("the degree of F(s): 1 (piecewise linear) to values − 1");
+    });
+    if count == n && degree == shown {
+        return false;
+    }
+    *f = f.resampled(count, degree);
+    true
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

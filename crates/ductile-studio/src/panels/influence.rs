@@ -10,7 +10,7 @@ use ductile_history::operation::Operation;
 use ductile_scene::document::{InfluenceSpec, NodeKind};
 
 use super::PanelContext;
-use super::curve_editor::curve_editor;
+use super::curve_editor::{curve_editor, spline_structure};
 use super::params::{REFUSED, Refusals, parameter_list};
 
 /// The influence and volume sections' state.
@@ -136,6 +136,7 @@ impl InfluenceEditor {
                 f.values = values;
                 response = Some(r);
             }
+            spline_structure(ui, f);
         }
         if let Some(reason) = self.refusals.reason("influence") {
             ui.colored_label(REFUSED, format!("refused: {reason}"));
@@ -220,7 +221,7 @@ impl InfluenceEditor {
             return;
         }
         let channels = shape_channels(shape);
-        if let Some(edit) = parameter_list(ui, cx.doc, name, &channels, &self.refusals) {
+        if let Some(edit) = parameter_list(ui, cx.doc, name, &channels, &self.refusals, &|_| None) {
             let mut new = shape.clone();
             let result = set_shape_channel(&mut new, &edit.path, &edit.value)
                 .map_err(|e| e.to_string())

@@ -3,6 +3,7 @@
 //! mutate the document.
 
 pub mod add_menu;
+pub mod adjust_last;
 pub mod curve_editor;
 pub mod history;
 pub mod influence;
@@ -113,6 +114,9 @@ pub struct PanelContext<'a> {
     pub gestures: &'a mut Gestures,
     /// Seconds since the Studio started (for playback).
     pub now: f64,
+    /// The rest meshes loaded, by mesh node name (a DOGME or Direct FFD constraint anchored
+    /// at a vertex is checked against its mesh's vertex count).
+    pub meshes: &'a [(String, std::sync::Arc<ductile_core::mesh::RestMesh>)],
 }
 
 impl PanelContext<'_> {
@@ -142,6 +146,13 @@ pub struct Gestures {
 }
 
 impl Gestures {
+    /// A gesture id of its own, for an edit that later edits may join (a node added from the
+    /// Add menu, which the "Adjust last operation" panel edits within the same step).
+    pub fn fresh(&mut self) -> u64 {
+        self.next += 1;
+        (1 << 48) + self.next
+    }
+
     /// The gesture of the widget behind `response`, new when its drag started or another
     /// widget had the last one.
     pub fn for_widget(&mut self, response: &egui::Response) -> Option<u64> {

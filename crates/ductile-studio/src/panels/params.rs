@@ -20,13 +20,21 @@ pub struct Meta {
     pub angle: bool,
     /// What the value is, for the tooltip.
     pub hint: &'static str,
+    /// For the values of a spline control `F(s)`, its degree: they are drawn with the F(s)
+    /// curve editor ([`curve_editor`]). `None` for other lists of values (a tube's radii).
+    pub spline: Option<usize>,
 }
 
 /// The [`Meta`] of a parameter path.
 #[must_use]
 pub fn meta(path: &str) -> Meta {
     let leaf = path.rsplit('.').next().unwrap_or(path);
-    let m = |unit, angle, hint| Meta { unit, angle, hint };
+    let m = |unit, angle, hint| Meta {
+        unit,
+        angle,
+        hint,
+        spline: None,
+    };
     match leaf {
         "gamma" => m(
             "",
@@ -177,9 +185,11 @@ pub fn value_widget(
         }
         Value::Values(values) => {
             let mut v = values.clone();
-            let degree = 3.min(v.len().saturating_sub(1)).max(1);
-            let r = curve_editor(ui, id, &mut v, degree);
-            let mut changed = r.changed().then_some(r);
+            let mut changed = None;
+            if let Some(degree) = meta.spline {
+                let r = curve_editor(ui, id, &mut v, degree);
+                changed = r.changed().then_some(r);
+            }
             ui.horizontal_wrapped(|ui| {
                 for (i, x) in v.iter_mut().enumerate() {
                     let r = ui
@@ -319,14 +329,16 @@ pub fn grouped(channels: &[(String, Value)]) -> Vec<(&str, Vec<&(String, Value)>
 
 /// Lists `channels` (path, value) of node `node` grouped by their path's prefix, one row
 /// each, animated ones coloured by their [`super::KeyState`] in `doc`; the row under the
-/// pointer is remembered for K ([`super::hover_channel`]). Returns the edit made this frame,
-/// if any.
+/// pointer is remembered for K ([`super::hover_channel`]). `spline_degree` gives the degree
+/// of the spline control whose values a path holds (drawn as an F(s) curve). Returns the
+/// edit made this frame, if any.
 pub fn parameter_list(
     ui: &mut egui::Ui,
     doc: &ductile_bevy::prelude::SceneDocument,
     node: &str,
     channels: &[(String, Value)],
     refusals: &Refusals,
+    spline_degree: &dyn Fn(&str) -> Option<usize>,
 ) -> Option<ParamEdit> {
     let id = format!("params-{node}");
     let id = id.as_str();
@@ -340,7 +352,10 @@ pub fn parameter_list(
                 .striped(true)
                 .show(ui, |ui| {
                     for (path, value) in items {
-                        let m = meta(path);
+                        let m = Meta {
+                            spline: spline_degree(path),
+                            ..meta(path)
+                        };
                         // Animated fields are coloured as in Blender (yellow on a key,
                         // green between keys, orange when changed and not keyed).
                         let state = super::KeyState::of(doc, node, path);

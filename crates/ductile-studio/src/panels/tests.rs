@@ -78,6 +78,8 @@ struct State<P> {
     panel: P,
     commands: Vec<DocumentCommand>,
     requests: Vec<PanelRequest>,
+    /// The rest meshes the panels see (none unless a test loads one).
+    meshes: Vec<(String, std::sync::Arc<ductile_core::mesh::RestMesh>)>,
 }
 
 impl<P> State<P> {
@@ -89,6 +91,7 @@ impl<P> State<P> {
             panel,
             commands: Vec::new(),
             requests: Vec::new(),
+            meshes: Vec::new(),
         }
     }
 
@@ -154,6 +157,7 @@ fn harness<'a, P: 'a>(
                     requests: Vec::new(),
                     gestures: &mut s.gestures,
                     now: 0.0,
+                    meshes: &s.meshes,
                 };
                 show(&mut s.panel, ui, &mut cx);
                 let (commands, requests) = (cx.commands, cx.requests);
@@ -735,4 +739,229 @@ fn the_key_offer_keys_or_reverts_an_edit_of_an_animated_field() {
         super::KeyState::of(&h.state().doc, "v", &path),
         super::KeyState::Keyed
     );
+}
+
+/// A spin button (a `DragValue`) showing `value`.
+fn spin_button(value: f64) -> egui_kittest::kittest::By<'static> {
+    egui_kittest::kittest::By::new().predicate(move |n| {
+        n.role() == egui::accesskit::Role::SpinButton
+            && n.numeric_value().is_some_and(|v| (v - value).abs() < 1e-6)
+    })
+}
+
+#[test]
+fn a_new_lattice_s_resolution_is_adjusted_within_its_add_step() {
+    use super::adjust_last::{AdjustLast, last_added_lattice};
+    let mut state = State::new(AdjustLast);
+    let place = Placement::around(&[Vec3::splat(-1.0), Vec3::ONE]).unwrap();
+    let added = crate::authoring::add_operation(
+        state.doc.document(),
+        &Selection::default(),
+        "m",
+        AddRequest::Tool(NewTool::Lattice(LatticeKind::Bernstein)),
+        &place,
+    )
+    .unwrap()
+    .unwrap();
+    // As the Studio adds it: in a gesture of its own.
+    let gesture = state.gestures.fresh();
+    state.doc.apply(added.op, "", Some(gesture)).unwrap();
+    let mut h = harness(state, |p, ui, cx| {
+        let view = ui.max_rect();
+        p.show(&ui.ctx().clone(), view, cx);
+    });
+    h.run();
+    h.get_by_label_contains("Adjust last: add lattice 'lattice'");
+    // Drag the first count (3) to the right: 0.05 per point, so 60 points make it 6.
+    let at = h.get_all(spin_button(3.0)).next().unwrap().rect().center();
+    slow_drag(&mut h, at, at + egui::vec2(60.0, 0.0), 12, true);
+    let doc = &h.state().doc;
+    assert_eq!(doc.history().len(), 1, "the resize joined the add step");
+    let (_, l, _) = last_added_lattice(doc).unwrap();
+    assert!(l.counts.0 > 3 && l.counts.1 == 3, "{:?}", l.counts);
+    assert!(
+        doc.history().entries()[0]
+            .label
+            .starts_with("add lattice 'lattice' ("),
+        "{}",
+        doc.history().entries()[0].label
+    );
+    // One Ctrl+Z removes the lattice, whatever its resolution.
+    h.state_mut().doc.undo().unwrap();
+    let doc = h.state().doc.document();
+    assert!(doc.node("lattice").is_err());
+    assert!(doc.problems().is_empty());
+    // Another step after the add closes the panel.
+    h.state_mut().doc.redo().unwrap();
+    let op = Operation::set_layer_weight(h.state().doc.document(), "m", 0, 0.5).unwrap();
+    h.state_mut().doc.apply(op, "", None).unwrap();
+    assert!(last_added_lattice(&h.state().doc).is_none());
+}
+
+#[test]
+fn a_volume_size_drag_is_one_undo_step() {
+    let mut state = State::new(Inspector::default());
+    let op =
+        Operation::set_volume(state.doc.document(), "v", Shape::Sphere { radius: 0.7 }).unwrap();
+    state.doc.apply(op, "", None).unwrap();
+    let start = state.doc.document().clone();
+    state.selection.select(Some("v".to_owned()));
+    let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
+    h.run();
+    // The radius (0.7) dragged 40 points over 20 frames, each frame's edit applied.
+    let at = h.get(spin_button(0.7)).rect().center();
+    slow_drag(&mut h, at, at + egui::vec2(40.0, 0.0), 20, true);
+    let doc = &h.state().doc;
+    assert_eq!(doc.history().len(), 2, "{:?}", doc.history().entries());
+    let NodeKind::Volume(v) = &doc.document().node("v").unwrap().kind else {
+        panic!("a volume")
+    };
+    let Shape::Sphere { radius } = v.shape else {
+        panic!("a sphere")
+    };
+    assert!(radius > 0.7, "{radius}");
+    h.state_mut().doc.undo().unwrap();
+    assert_eq!(h.state().doc.document(), &start);
+}
+
+#[test]
+fn an_inspector_field_drag_is_one_undo_step() {
+    let mut state = State::new(Inspector::default());
+    state.selection.select(Some("p".to_owned()));
+    let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
+    h.run();
+    // γ (0.5) dragged to the right over 20 frames.
+    let at = h.get(spin_button(0.5)).rect().center();
+    slow_drag(&mut h, at, at + egui::vec2(60.0, 0.0), 20, true);
+    let doc = &h.state().doc;
+    assert_eq!(doc.history().len(), 1, "{:?}", doc.history().entries());
+    let NodeKind::Tool(Tool::Ffsd(f)) = &doc.document().node("p").unwrap().kind else {
+        panic!("the FFSD tool")
+    };
+    assert!(f.points[0].gamma > 0.5, "{}", f.points[0].gamma);
+}
+
+/// The sketch tool of [`a_sketch_tool_asks_for_its_strokes_to_be_redrawn`] in bend mode
+/// with a turning control `turning`.
+fn sketch_with_turning(turning: ductile_core::spline::SplineControl) -> Tool {
+    use ductile_core::sketch::tool::{Curve, SketchMode};
+    let camera = ductile_core::sketch::camera::Camera {
+        eye: Vec3::Z * 5.0,
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        projection: ductile_core::sketch::camera::Projection::Perspective { fov_y: 0.6 },
+        near: 0.1,
+        far: 100.0,
+        viewport: bevy::math::Vec2::new(400.0, 300.0),
+    };
+    let stroke = ductile_core::sketch::tool::Stroke {
+        pixels: vec![bevy::math::Vec2::ZERO, bevy::math::Vec2::ONE * 50.0],
+        camera,
+    };
+    let mut tool = ductile_scene::sketching::twist_tool(stroke.clone(), 1.0, None);
+    if let Tool::Sketch(s) = &mut tool {
+        s.mode = SketchMode::Bend {
+            target: Curve::Stroke(stroke),
+            turning: Some(turning),
+        };
+    }
+    tool
+}
+
+#[test]
+fn a_spline_control_keeps_its_degree_and_gains_a_value_resampled() {
+    use ductile_core::sketch::tool::SketchMode;
+    use ductile_core::spline::SplineControl;
+    let turning = SplineControl {
+        values: vec![0.0, 0.8, 1.0],
+        degree: 1,
+    };
+    let mut state = State::new(Inspector::default());
+    let op = Operation::set_tool(
+        state.doc.document(),
+        "p",
+        sketch_with_turning(turning.clone()),
+    )
+    .unwrap();
+    state.doc.apply(op, "", None).unwrap();
+    state.selection.select(Some("p".to_owned()));
+    let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
+    h.run();
+    h.get_by_label_contains("3 values");
+    h.get_by_label("+").click();
+    h.run();
+    let ops = h.state().ops();
+    let Some(Operation::SetTool {
+        new: Tool::Sketch(s),
+        ..
+    }) = ops.last()
+    else {
+        panic!("{ops:?}")
+    };
+    let SketchMode::Bend {
+        turning: Some(f), ..
+    } = &s.mode
+    else {
+        panic!("{:?}", s.mode)
+    };
+    assert_eq!((f.values.len(), f.degree), (4, 1));
+    // The piecewise-linear F is sampled at the new abscissae 0, 1/3, 2/3, 1.
+    for (v, s) in f.values.iter().zip([0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0]) {
+        assert!((v - turning.eval(s)).abs() < 1e-6, "{:?}", f.values);
+    }
+}
+
+#[test]
+fn a_constraint_on_a_vertex_the_mesh_lacks_is_refused_with_the_reason() {
+    use ductile_core::dogme::{Anchor, Constraint, DogmeTool, Support};
+    let mut state = State::new(Inspector::default());
+    let tool = Tool::Dogme(DogmeTool {
+        constraints: vec![Constraint {
+            at: Anchor::Point(Vec3::new(0.1, 0.9, 0.0)),
+            displacement: Vec3::Z * 0.1,
+            support: Support::Sphere { radius: 0.5 },
+        }],
+        degree: 3,
+    });
+    let op = Operation::set_tool(state.doc.document(), "p", tool).unwrap();
+    state.doc.apply(op, "", None).unwrap();
+    // The mesh "m": one triangle, so vertices 0 to 2.
+    let mesh = ductile_core::mesh::Mesh {
+        positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+        indices: vec![0, 1, 2],
+        ..Default::default()
+    };
+    let rest = ductile_core::mesh::RestMesh::new(mesh, "m").unwrap();
+    state.meshes = vec![("m".to_owned(), std::sync::Arc::new(rest))];
+    state.selection.select(Some("p".to_owned()));
+    let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
+    h.run();
+    // "free point" → "mesh vertex": the closest vertex to (0.1, 0.9, 0) is vertex 2.
+    h.get_by_value("free point").click();
+    h.run();
+    h.get_by_label("mesh vertex").click();
+    h.run();
+    let ops = h.state().ops();
+    let Some(Operation::SetTool {
+        new: Tool::Dogme(d),
+        ..
+    }) = ops.last()
+    else {
+        panic!("{ops:?}")
+    };
+    assert_eq!(d.constraints[0].at, Anchor::Vertex(2));
+    h.state_mut().apply_commands();
+    h.run();
+    // Vertex 7 is refused at the widget, with the reason, and not applied.
+    let field = h.get(spin_button(2.0));
+    field.click();
+    h.run();
+    // The field is in text mode with its text selected: typing replaces it.
+    h.event(egui::Event::Text("7".to_owned()));
+    h.run();
+    h.key_press(egui::Key::Enter);
+    h.run();
+    h.run();
+    assert!(h.state().commands.is_empty(), "{:?}", h.state().ops());
+    h.get_by_label_contains("vertex 7 does not exist (mesh 'm' has 3 welded vertices, 0 to 2)");
 }

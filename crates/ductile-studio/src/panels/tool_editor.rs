@@ -23,6 +23,7 @@ use ductile_history::operation::Operation;
 use ductile_scene::create::resized_lattice;
 use ductile_scene::handles::HandleId;
 
+use super::curve_editor::{curve_editor, spline_structure};
 use super::params::{REFUSED, Refusals, meta, parameter_list, value_widget};
 use super::{PanelContext, PanelRequest};
 
@@ -76,7 +77,10 @@ impl ToolEditor {
             ui.colored_label(REFUSED, format!("refused: {reason}"));
         }
         if let Some((new, response)) = structural {
-            self.apply(cx, name, tool, new, "structure", response);
+            match AnchorMesh::of(cx, name).and_then(|m| m.problem(&new)) {
+                Some(reason) => self.refusals.refuse("structure", reason),
+                None => self.apply(cx, name, tool, new, "structure", response),
+            }
         }
         // The selected handles' own values.
         let selected: Vec<HandleId> = cx.selection.handles.iter().copied().collect();
@@ -92,7 +96,8 @@ impl ToolEditor {
         if channels.is_empty() {
             ui.weak("No numeric parameter.");
         }
-        if let Some(edit) = parameter_list(ui, cx.doc, name, &channels, &self.refusals) {
+        let degree = |path: &str| spline_of(tool, path).map(|f| f.degree);
+        if let Some(edit) = parameter_list(ui, cx.doc, name, &channels, &self.refusals, &degree) {
             let mut new = tool.clone();
             match set_tool_channel(&mut new, &edit.path, &edit.value) {
                 Ok(()) => self.apply(cx, name, tool, new, &edit.path, Some(edit.response)),
@@ -131,6 +136,20 @@ impl ToolEditor {
     }
 }
 
+/// The spline control `F(s)` whose values channel `path` of `tool` holds (a sketch tool's
+/// turning, twist-speed or scale control).
+fn spline_of<'a>(tool: &'a Tool, path: &str) -> Option<&'a SplineControl> {
+    let Tool::Sketch(s) = tool else {
+        return None;
+    };
+    match (path, &s.mode) {
+        ("mode.turning.values", SketchMode::Bend { turning, .. }) => turning.as_ref(),
+        ("mode.speed.values", SketchMode::Twist { speed, .. }) => speed.as_ref(),
+        ("scale.values", _) => s.scale.as_ref(),
+        _ => None,
+    }
+}
+
 /// The structure controls of `tool`; returns the changed tool (and the widget, for drags).
 fn structure(
     ui: &mut egui::Ui,
@@ -140,11 +159,19 @@ fn structure(
 ) -> Option<(Tool, Option<egui::Response>)> {
     let mut t = tool.clone();
     let mut response = None;
+    let mesh = AnchorMesh::of(cx, name);
     let changed = match &mut t {
         Tool::Ffsd(f) => ffsd(ui, f),
-        Tool::Dogme(d) => dogme(ui, d),
+        Tool::Dogme(d) => dogme(ui, d, mesh.as_ref()),
         Tool::DirectFfd(d) => {
-            let a = lattice_structure(ui, &mut d.lattice);
+            let mut a = lattice_structure(ui, &mut d.lattice);
+            lattice_hint(ui, &d.lattice);
+            for (i, c) in d.constraints.iter_mut().enumerate() {
+                ui.horizontal(|ui| {
+                    ui.label(format!("constraint {i}"));
+                    a |= anchor_choice(ui, ("direct-anchor", i), &mut c.at, mesh.as_ref());
+                });
+            }
             let b = ui
                 .horizontal(|ui| {
                     ui.label(format!("{} constraints", d.constraints.len()));
@@ -168,8 +195,16 @@ fn structure(
                 .inner;
             a || b
         }
-        Tool::Lattice(l) => lattice_structure(ui, l),
-        Tool::Axial(a) => axial(ui, a),
+        Tool::Lattice(l) => {
+            let c = lattice_structure(ui, l);
+            lattice_hint(ui, l);
+            c
+        }
+        Tool::Axial(a) => {
+            let (c, r) = axial(ui, a);
+            response = r;
+            c
+        }
         Tool::Curve(c) => curve(ui, c),
         Tool::ShapeSurface(s) => surface(ui, s),
         Tool::Sketch(s) => {
@@ -283,7 +318,104 @@ fn ffsd(ui: &mut egui::Ui, f: &mut FfsdTool) -> bool {
     changed
 }
 
-fn dogme(ui: &mut egui::Ui, d: &mut DogmeTool) -> bool {
+/// The mesh whose welded vertices a tool's vertex anchors index: the first loaded mesh whose
+/// stack uses the tool, with the tool-to-mesh transform and the rest positions.
+struct AnchorMesh {
+    name: String,
+    to_mesh: bevy::math::Affine3A,
+    rest: std::sync::Arc<ductile_core::mesh::RestMesh>,
+}
+
+impl AnchorMesh {
+    fn of(cx: &PanelContext<'_>, tool: &str) -> Option<Self> {
+        let doc = cx.doc.shown();
+        cx.meshes.iter().find_map(|(mesh, rest)| {
+            let uses = doc
+                .mesh(mesh)
+                .is_ok_and(|m| m.stack.iter().any(|l| l.tool == tool));
+            let to_mesh = doc.to_mesh_space(tool, mesh).ok()?;
+            uses.then(|| Self {
+                name: mesh.clone(),
+                to_mesh,
+                rest: rest.clone(),
+            })
+        })
+    }
+
+    fn vertices(&self) -> usize {
+        self.rest.welded_positions().len()
+    }
+
+    /// Why `tool`'s vertex anchors do not fit this mesh, if they do not.
+    fn problem(&self, tool: &Tool) -> Option<String> {
+        let anchors: Vec<Anchor> = match tool {
+            Tool::Dogme(d) => d.constraints.iter().map(|c| c.at).collect(),
+            Tool::DirectFfd(d) => d.constraints.iter().map(|c| c.at).collect(),
+            _ => return None,
+        };
+        let n = self.vertices();
+        anchors.iter().enumerate().find_map(|(k, a)| match a {
+            Anchor::Vertex(v) if *v as usize >= n => Some(format!(
+                "constraint {k}: vertex {v} does not exist (mesh '{}' has {n} welded vertices, 0 to {})",
+                self.name,
+                n.saturating_sub(1)
+            )),
+            _ => None,
+        })
+    }
+}
+
+/// A constraint's anchor: a free point or a mesh vertex (its index). Switching keeps the
+/// place: a point becomes the closest rest vertex of the mesh, a vertex the point at its rest
+/// position. Returns true when the anchor changed.
+fn anchor_choice(
+    ui: &mut egui::Ui,
+    id: impl std::hash::Hash + std::fmt::Debug,
+    at: &mut Anchor,
+    mesh: Option<&AnchorMesh>,
+) -> bool {
+    let mut changed = false;
+    let current = usize::from(matches!(at, Anchor::Vertex(_)));
+    if let Some(k) = choice(ui, id, current, &["free point", "mesh vertex"]) {
+        *at = match (*at, k, mesh) {
+            (Anchor::Point(p), 1, Some(m)) => {
+                let q = m.to_mesh.transform_point3(p);
+                let closest = m
+                    .rest
+                    .welded_positions()
+                    .iter()
+                    .enumerate()
+                    .min_by(|a, b| a.1.distance_squared(q).total_cmp(&b.1.distance_squared(q)))
+                    .map_or(0, |(i, _)| i as u32);
+                Anchor::Vertex(closest)
+            }
+            (Anchor::Vertex(v), 0, Some(m)) => Anchor::Point(
+                m.rest
+                    .welded_positions()
+                    .get(v as usize)
+                    .map_or(Vec3::ZERO, |&q| m.to_mesh.inverse().transform_point3(q)),
+            ),
+            (_, 0, _) => Anchor::Point(Vec3::ZERO),
+            _ => Anchor::Vertex(0),
+        };
+        changed = true;
+    }
+    if let Anchor::Vertex(v) = at {
+        let r = ui.add(egui::DragValue::new(v).prefix("vertex ").speed(1.0));
+        let r = match mesh {
+            Some(m) => r.on_hover_text(format!(
+                "welded vertex of mesh '{}', 0 to {}",
+                m.name,
+                m.vertices().saturating_sub(1)
+            )),
+            None => r,
+        };
+        changed |= r.changed();
+    }
+    changed
+}
+
+fn dogme(ui: &mut egui::Ui, d: &mut DogmeTool, mesh: Option<&AnchorMesh>) -> bool {
     let mut changed = false;
     ui.horizontal(|ui| {
         ui.label("degree");
@@ -295,18 +427,7 @@ fn dogme(ui: &mut egui::Ui, d: &mut DogmeTool) -> bool {
     for (i, c) in d.constraints.iter_mut().enumerate() {
         ui.horizontal(|ui| {
             ui.label(format!("constraint {i}"));
-            let anchor = usize::from(matches!(c.at, Anchor::Vertex(_)));
-            if let Some(k) = choice(ui, ("anchor", i), anchor, &["free point", "mesh vertex"]) {
-                c.at = if k == 0 {
-                    Anchor::Point(Vec3::ZERO)
-                } else {
-                    Anchor::Vertex(0)
-                };
-                changed = true;
-            }
-            if let Anchor::Vertex(v) = &mut c.at {
-                changed |= ui.add(egui::DragValue::new(v).prefix("vertex ")).changed();
-            }
+            changed |= anchor_choice(ui, ("anchor", i), &mut c.at, mesh);
             let support = usize::from(matches!(c.support, Support::Box { .. }));
             if let Some(k) = choice(
                 ui,
@@ -354,7 +475,9 @@ fn dogme(ui: &mut egui::Ui, d: &mut DogmeTool) -> bool {
     changed
 }
 
-fn lattice_structure(ui: &mut egui::Ui, l: &mut LatticeTool) -> bool {
+/// The lattice's structure: control point counts (a resize keeps the moved points where it
+/// can, [`resized_lattice`]), basis and degrees. Returns true when it changed.
+pub fn lattice_structure(ui: &mut egui::Ui, l: &mut LatticeTool) -> bool {
     let mut changed = false;
     ui.horizontal(|ui| {
         let mut counts = l.counts;
@@ -388,15 +511,20 @@ fn lattice_structure(ui: &mut egui::Ui, l: &mut LatticeTool) -> bool {
             }
         }
     });
+    changed
+}
+
+/// What to do with a lattice's control points, under its structure.
+fn lattice_hint(ui: &mut egui::Ui, l: &LatticeTool) {
     ui.weak(format!(
         "{} moved control points; click one in the viewport to edit it (Shift: several)",
         l.points.len()
     ));
-    changed
 }
 
-fn axial(ui: &mut egui::Ui, a: &mut AxialTool) -> bool {
+fn axial(ui: &mut egui::Ui, a: &mut AxialTool) -> (bool, Option<egui::Response>) {
     let mut changed = false;
+    let mut response = None;
     ui.horizontal(|ui| {
         ui.label("axis");
         let current = match a.shape {
@@ -427,6 +555,22 @@ fn axial(ui: &mut egui::Ui, a: &mut AxialTool) -> bool {
         ui.label("falloff");
         changed |= falloff_choice(ui, "axial-falloff", &mut a.falloff);
     });
+    if let Falloff::Curve(f) = &mut a.falloff {
+        ui.label("weight F(s) from the radius (s = 0) to the inner radius (s = 1)");
+        let mut values = f.values.clone();
+        let r = curve_editor(
+            ui,
+            egui::Id::new("axial-falloff-curve"),
+            &mut values,
+            f.degree,
+        );
+        if r.changed() {
+            f.values = values;
+            response = Some(r);
+            changed = true;
+        }
+        changed |= spline_structure(ui, f);
+    }
     ui.horizontal(|ui| {
         ui.label(format!("{} axis points", a.rest.len()));
         if ui.button("+ point").clicked() {
@@ -440,7 +584,7 @@ fn axial(ui: &mut egui::Ui, a: &mut AxialTool) -> bool {
             changed = true;
         }
     });
-    changed
+    (changed, response)
 }
 
 fn extend_axis(points: &mut Vec<AxisPoint>) {
@@ -633,6 +777,21 @@ fn sketch(ui: &mut egui::Ui, s: &mut SketchTool) -> (bool, Option<egui::Response
             },
         );
     });
+    // Their number of values and degree (the values are drawn as F(s) curves below).
+    let controls = match &mut s.mode {
+        SketchMode::Bend { turning, .. } => [("turning", turning), ("scale", &mut s.scale)],
+        SketchMode::Twist { speed, .. } => [("twist speed", speed), ("scale", &mut s.scale)],
+    };
+    for (label, f) in controls {
+        if let Some(f) = f {
+            ui.push_id(label, |ui| {
+                ui.horizontal(|ui| {
+                    ui.label(format!("{label} F(s):"));
+                    changed |= spline_structure(ui, f);
+                });
+            });
+        }
+    }
     (changed, response)
 }
 
