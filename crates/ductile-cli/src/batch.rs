@@ -99,6 +99,19 @@ impl Shard {
             // so that one task resubmitted alone (`sbatch --array=17`, an array of one task)
             // still takes its own shard and not every input.
             if let Some(count) = number(SHARD_COUNT_VAR)? {
+                // The array must be 0 to count − 1 (a lone resubmitted task aside): an array
+                // of another size would leave shards to no task, or give two tasks one.
+                let tasks = number("SLURM_ARRAY_TASK_COUNT")?.unwrap_or(1);
+                let min = number("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
+                let step = number("SLURM_ARRAY_TASK_STEP")?.unwrap_or(1);
+                if tasks > 1 && (tasks != count || min != 0 || step != 1) {
+                    bail!(
+                        "--shard auto: {SHARD_COUNT_VAR}={count} but the Slurm array has \
+                         {tasks} tasks from {min} in steps of {step}: with {SHARD_COUNT_VAR} \
+                         the array must be --array=0-{} (one task per shard)",
+                        count.saturating_sub(1)
+                    );
+                }
                 return Self::new(id, count).with_context(|| {
                     format!(
                         "--shard auto (Slurm job array with {SHARD_COUNT_VAR}: the task ids \
@@ -528,6 +541,32 @@ mod tests {
         );
         counted[0].1 = "500";
         assert!(Shard::from_env(env(&counted)).is_err(), "ids are 0 to 499");
+        // With the count given, the array must be 0 to count − 1.
+        let whole = [
+            ("SLURM_ARRAY_TASK_ID", "3"),
+            ("SLURM_ARRAY_TASK_COUNT", "500"),
+            (SHARD_COUNT_VAR, "500"),
+        ];
+        assert_eq!(
+            Shard::from_env(env(&whole)).unwrap(),
+            Shard::new(3, 500).unwrap()
+        );
+        for wrong in [
+            [
+                ("SLURM_ARRAY_TASK_COUNT", "250"),
+                ("SLURM_ARRAY_TASK_MIN", "0"),
+            ],
+            [
+                ("SLURM_ARRAY_TASK_COUNT", "500"),
+                ("SLURM_ARRAY_TASK_MIN", "1"),
+            ],
+        ] {
+            let mut e = whole.to_vec();
+            e.retain(|(k, _)| *k != "SLURM_ARRAY_TASK_COUNT");
+            e.extend(wrong);
+            let err = Shard::from_env(env(&e)).unwrap_err();
+            assert!(format!("{err:#}").contains("--array=0-499"), "{err:#}");
+        }
         // A batch of one shard.
         let one = [
             ("SLURM_ARRAY_TASK_ID", "0"),
