@@ -122,8 +122,13 @@ pub const MAX_VALUES: usize = 32;
 /// The structure of spline control `f` beside its editor: how many control values (− / +)
 /// and the degree. A change resamples `F(s)` at the new control values' abscissae
 /// ([`SplineControl::resampled`]): a linear `F` is kept exactly, another keeps its shape.
-/// Returns true when `f` changed.
-pub fn spline_structure(ui: &mut egui::Ui, f: &mut SplineControl) -> bool {
+/// Returns true when `f` changed; `drag` gets the degree field's response when a drag of
+/// it changed `f` (a drag is one undo step).
+pub fn spline_structure(
+    ui: &mut egui::Ui,
+    f: &mut SplineControl,
+    drag: &mut Option<egui::Response>,
+) -> bool {
     let n = f.values.len();
     let mut count = n;
     let shown = f.degree.clamp(1, n.saturating_sub(1).max(1));
@@ -144,13 +149,17 @@ pub fn spline_structure(ui: &mut egui::Ui, f: &mut SplineControl) -> bool {
         {
             count = n + 1;
         }
-        ui.add(
-            egui::DragValue::new(&mut degree)
-                .range(1..=n.saturating_sub(1).clamp(1, 15))
-                .speed(0.05)
-                .prefix("degree "),
-        )
-        .on_hover_text("the degree of F(s): 1 (piecewise linear) to values − 1");
+        let r = ui
+            .add(
+                egui::DragValue::new(&mut degree)
+                    .range(1..=n.saturating_sub(1).clamp(1, 15))
+                    .speed(0.05)
+                    .prefix("degree "),
+            )
+            .on_hover_text("the degree of F(s): 1 (piecewise linear) to values − 1");
+        if degree != shown {
+            *drag = Some(r);
+        }
     });
     if count == n && degree == shown {
         return false;

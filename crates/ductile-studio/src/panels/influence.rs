@@ -136,7 +136,7 @@ impl InfluenceEditor {
                 f.values = values;
                 response = Some(r);
             }
-            spline_structure(ui, f);
+            spline_structure(ui, f, &mut response);
         }
         if let Some(reason) = self.refusals.reason("influence") {
             ui.colored_label(REFUSED, format!("refused: {reason}"));

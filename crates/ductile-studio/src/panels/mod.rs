@@ -139,10 +139,27 @@ impl PanelContext<'_> {
 
 /// Gesture ids for widgets: a slider drag keeps one id from press to release, so its edits
 /// merge into one undo step; a keyboard change is its own step.
-#[derive(bevy::prelude::Resource, Debug, Default)]
+#[derive(bevy::prelude::Resource, Debug)]
 pub struct Gestures {
     next: u64,
     current: Option<(egui::Id, u64)>,
+}
+
+impl Default for Gestures {
+    /// Ids counted from the milliseconds since the UNIX epoch when the session starts: a
+    /// history saved by an earlier session keeps its steps' gesture ids, and a new gesture
+    /// must not continue one of them (its edit would merge into the loaded step). A session
+    /// takes an id per drag or added node, far fewer than the milliseconds that pass, so its
+    /// ids stay below the clock and a later session starts above all of them.
+    fn default() -> Self {
+        let now_ms = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_millis() as u64);
+        Self {
+            next: now_ms,
+            current: None,
+        }
+    }
 }
 
 impl Gestures {

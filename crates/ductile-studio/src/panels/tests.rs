@@ -964,4 +964,106 @@ fn a_constraint_on_a_vertex_the_mesh_lacks_is_refused_with_the_reason() {
     h.run();
     assert!(h.state().commands.is_empty(), "{:?}", h.state().ops());
     h.get_by_label_contains("vertex 7 does not exist (mesh 'm' has 3 welded vertices, 0 to 2)");
+    // A tool whose anchor no longer fits (its mesh re-imported smaller) can still be repaired:
+    // only the anchors an edit changes are judged.
+    let mut broken = d.clone();
+    broken.constraints[0].at = Anchor::Vertex(9);
+    broken.degree = 4;
+    let op = Operation::set_tool(h.state().doc.document(), "p", Tool::Dogme(broken)).unwrap();
+    h.state_mut().doc.apply(op, "", None).unwrap();
+    h.run();
+    h.run();
+    h.get_by_value("mesh vertex").click();
+    h.run();
+    h.get_by_label("free point").click();
+    h.run();
+    let ops = h.state().ops();
+    let Some(Operation::SetTool {
+        new: Tool::Dogme(d),
+        ..
+    }) = ops.last()
+    else {
+        panic!("the repair is applied: {ops:?}")
+    };
+    assert!(matches!(d.constraints[0].at, Anchor::Point(_)));
+}
+
+#[test]
+fn the_stack_panel_enables_weighs_and_reorders_by_dragging() {
+    let mut state = State::new(StackPanel::default());
+    let (op, _) = Operation::duplicate_layer(state.doc.document(), "m", 0).unwrap();
+    state.doc.apply(op, "", None).unwrap();
+    let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
+    h.run();
+    // The enabled box of the lower layer.
+    h.get_all_by_role(egui::accesskit::Role::CheckBox)
+        .next()
+        .unwrap()
+        .click();
+    h.run();
+    assert!(
+        matches!(
+            h.state().ops()[..],
+            [Operation::SetLayerEnabled {
+                index: 0,
+                new: false,
+                ..
+            }]
+        ),
+        "{:?}",
+        h.state().ops()
+    );
+    h.state_mut().commands.clear();
+    // The weight of the lower layer dragged over 20 frames: one undo step.
+    let at = h.get_all(spin_button(1.0)).next().unwrap().rect().center();
+    slow_drag(&mut h, at, at - egui::vec2(60.0, 0.0), 20, true);
+    let doc = &h.state().doc;
+    assert_eq!(doc.history().len(), 2, "{:?}", doc.history().entries());
+    let weight = doc.document().mesh("m").unwrap().stack[0].weight;
+    assert!(weight < 1.0 && weight > 0.0, "{weight}");
+    // The ☰ of the lower layer dropped on the upper one moves it there.
+    let handles: Vec<egui::Pos2> = h.get_all_by_label("☰").map(|n| n.rect().center()).collect();
+    assert_eq!(handles.len(), 2);
+    slow_drag(&mut h, handles[0], handles[1], 10, false);
+    let ops = h.state().ops();
+    assert!(
+        matches!(
+            ops.last(),
+            Some(Operation::MoveLayer { from: 0, to: 1, .. })
+        ),
+        "{ops:?}"
+    );
+}
+
+#[test]
+fn the_outliner_filters_hides_and_reparents_by_dragging() {
+    let mut h = harness(State::new(Outliner::default()), |p, ui, cx| p.show(ui, cx));
+    h.run();
+    assert_eq!(h.get_all_by_label("🗑").count(), 3, "m, p and v");
+    // The eye of the volume hides it (view state, no undo step).
+    h.get_all_by_label("👁").nth(2).unwrap().click();
+    h.run();
+    assert!(h.state().selection.is_hidden("v"));
+    assert!(h.state().ops().is_empty());
+    // Dragging the volume onto the tool makes it the tool's child.
+    let from = h.get_by_label("⚪ v").rect().center();
+    let to = h.get_by_label_contains(" p").rect().center();
+    slow_drag(&mut h, from, to, 10, false);
+    let ops = h.state().ops();
+    assert!(
+        ops.iter().any(|o| matches!(o,
+            Operation::Reparent { node, new: Some(p), .. } if node == "v" && p == "p")),
+        "{ops:?}"
+    );
+    h.state_mut().commands.clear();
+    // The filter keeps the matching nodes and their ancestors.
+    h.get_all_by_role(egui::accesskit::Role::TextInput)
+        .next()
+        .unwrap()
+        .click();
+    h.run();
+    h.event(egui::Event::Text("v".to_owned()));
+    h.run();
+    h.run();
+    assert_eq!(h.get_all_by_label("🗑").count(), 2, "m and v");
 }

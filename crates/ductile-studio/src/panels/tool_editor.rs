@@ -77,7 +77,10 @@ impl ToolEditor {
             ui.colored_label(REFUSED, format!("refused: {reason}"));
         }
         if let Some((new, response)) = structural {
-            match AnchorMesh::of(cx, name).and_then(|m| m.problem(&new)) {
+            let problem = AnchorMesh::all(cx, name)
+                .iter()
+                .find_map(|m| m.problem(&new, tool));
+            match problem {
                 Some(reason) => self.refusals.refuse("structure", reason),
                 None => self.apply(cx, name, tool, new, "structure", response),
             }
@@ -162,14 +165,20 @@ fn structure(
     let mesh = AnchorMesh::of(cx, name);
     let changed = match &mut t {
         Tool::Ffsd(f) => ffsd(ui, f),
-        Tool::Dogme(d) => dogme(ui, d, mesh.as_ref()),
+        Tool::Dogme(d) => dogme(ui, d, mesh.as_ref(), &mut response),
         Tool::DirectFfd(d) => {
             let mut a = lattice_structure(ui, &mut d.lattice);
             lattice_hint(ui, &d.lattice);
             for (i, c) in d.constraints.iter_mut().enumerate() {
                 ui.horizontal(|ui| {
                     ui.label(format!("constraint {i}"));
-                    a |= anchor_choice(ui, ("direct-anchor", i), &mut c.at, mesh.as_ref());
+                    a |= anchor_choice(
+                        ui,
+                        ("direct-anchor", i),
+                        &mut c.at,
+                        mesh.as_ref(),
+                        &mut response,
+                    );
                 });
             }
             let b = ui
@@ -327,35 +336,52 @@ struct AnchorMesh {
 }
 
 impl AnchorMesh {
-    fn of(cx: &PanelContext<'_>, tool: &str) -> Option<Self> {
+    /// Every loaded mesh whose stack uses `tool`, by name.
+    fn all(cx: &PanelContext<'_>, tool: &str) -> Vec<Self> {
         let doc = cx.doc.shown();
-        cx.meshes.iter().find_map(|(mesh, rest)| {
-            let uses = doc
-                .mesh(mesh)
-                .is_ok_and(|m| m.stack.iter().any(|l| l.tool == tool));
-            let to_mesh = doc.to_mesh_space(tool, mesh).ok()?;
-            uses.then(|| Self {
-                name: mesh.clone(),
-                to_mesh,
-                rest: rest.clone(),
+        let mut all: Vec<Self> = cx
+            .meshes
+            .iter()
+            .filter_map(|(mesh, rest)| {
+                let uses = doc
+                    .mesh(mesh)
+                    .is_ok_and(|m| m.stack.iter().any(|l| l.tool == tool));
+                let to_mesh = doc.to_mesh_space(tool, mesh).ok()?;
+                uses.then(|| Self {
+                    name: mesh.clone(),
+                    to_mesh,
+                    rest: rest.clone(),
+                })
             })
-        })
+            .collect();
+        all.sort_by(|a, b| a.name.cmp(&b.name));
+        all
+    }
+
+    /// The first of [`AnchorMesh::all`] by name: where a switched anchor is placed.
+    fn of(cx: &PanelContext<'_>, tool: &str) -> Option<Self> {
+        Self::all(cx, tool).into_iter().next()
     }
 
     fn vertices(&self) -> usize {
         self.rest.welded_positions().len()
     }
 
-    /// Why `tool`'s vertex anchors do not fit this mesh, if they do not.
-    fn problem(&self, tool: &Tool) -> Option<String> {
-        let anchors: Vec<Anchor> = match tool {
-            Tool::Dogme(d) => d.constraints.iter().map(|c| c.at).collect(),
-            Tool::DirectFfd(d) => d.constraints.iter().map(|c| c.at).collect(),
-            _ => return None,
+    /// Why a vertex anchor of `new` that differs from `old`'s (an edit) does not fit this
+    /// mesh, if one does not. Anchors the edit left alone are not judged: a tool whose other
+    /// anchors no longer fit (its mesh re-imported smaller) can still be repaired one by one.
+    fn problem(&self, new: &Tool, old: &Tool) -> Option<String> {
+        let anchors = |t: &Tool| -> Vec<Anchor> {
+            match t {
+                Tool::Dogme(d) => d.constraints.iter().map(|c| c.at).collect(),
+                Tool::DirectFfd(d) => d.constraints.iter().map(|c| c.at).collect(),
+                _ => Vec::new(),
+            }
         };
+        let (new, old) = (anchors(new), anchors(old));
         let n = self.vertices();
-        anchors.iter().enumerate().find_map(|(k, a)| match a {
-            Anchor::Vertex(v) if *v as usize >= n => Some(format!(
+        new.iter().enumerate().find_map(|(k, a)| match a {
+            Anchor::Vertex(v) if *v as usize >= n && old.get(k) != Some(a) => Some(format!(
                 "constraint {k}: vertex {v} does not exist (mesh '{}' has {n} welded vertices, 0 to {})",
                 self.name,
                 n.saturating_sub(1)
@@ -373,6 +399,7 @@ fn anchor_choice(
     id: impl std::hash::Hash + std::fmt::Debug,
     at: &mut Anchor,
     mesh: Option<&AnchorMesh>,
+    drag: &mut Option<egui::Response>,
 ) -> bool {
     let mut changed = false;
     let current = usize::from(matches!(at, Anchor::Vertex(_)));
@@ -410,24 +437,34 @@ fn anchor_choice(
             )),
             None => r,
         };
-        changed |= r.changed();
+        if r.changed() {
+            changed = true;
+            *drag = Some(r);
+        }
     }
     changed
 }
 
-fn dogme(ui: &mut egui::Ui, d: &mut DogmeTool, mesh: Option<&AnchorMesh>) -> bool {
+fn dogme(
+    ui: &mut egui::Ui,
+    d: &mut DogmeTool,
+    mesh: Option<&AnchorMesh>,
+    drag: &mut Option<egui::Response>,
+) -> bool {
     let mut changed = false;
     ui.horizontal(|ui| {
         ui.label("degree");
-        changed |= ui
-            .add(egui::DragValue::new(&mut d.degree).speed(0.05))
-            .changed();
+        let r = ui.add(egui::DragValue::new(&mut d.degree).speed(0.05));
+        if r.changed() {
+            changed = true;
+            *drag = Some(r);
+        }
     });
     let mut remove = None;
     for (i, c) in d.constraints.iter_mut().enumerate() {
         ui.horizontal(|ui| {
             ui.label(format!("constraint {i}"));
-            changed |= anchor_choice(ui, ("anchor", i), &mut c.at, mesh);
+            changed |= anchor_choice(ui, ("anchor", i), &mut c.at, mesh, drag);
             let support = usize::from(matches!(c.support, Support::Box { .. }));
             if let Some(k) = choice(
                 ui,
@@ -569,7 +606,7 @@ fn axial(ui: &mut egui::Ui, a: &mut AxialTool) -> (bool, Option<egui::Response>)
             response = Some(r);
             changed = true;
         }
-        changed |= spline_structure(ui, f);
+        changed |= spline_structure(ui, f, &mut response);
     }
     ui.horizontal(|ui| {
         ui.label(format!("{} axis points", a.rest.len()));
@@ -787,7 +824,7 @@ fn sketch(ui: &mut egui::Ui, s: &mut SketchTool) -> (bool, Option<egui::Response
             ui.push_id(label, |ui| {
                 ui.horizontal(|ui| {
                     ui.label(format!("{label} F(s):"));
-                    changed |= spline_structure(ui, f);
+                    changed |= spline_structure(ui, f, &mut response);
                 });
             });
         }
