@@ -19,7 +19,7 @@ use glam::{Affine3A, Mat3, Quat, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::chunks::{BIND_CHUNK, Reuse, bind_slots};
+use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots};
 use crate::curve::{CurveBasis, CurveEvaluator, validate_polygon};
 use crate::error::{CoreError, Result, check_finite};
 use crate::frames::{Frame, PolylineIndex, double_reflection, polyline_tangents};
@@ -267,6 +267,12 @@ pub struct AxialBind {
     weight: Vec<f32>,
 }
 
+impl Slotted for AxialBind {
+    fn slots(&self) -> &[u32] {
+        &self.slot
+    }
+}
+
 impl AxialBind {
     /// Zone weight of welded vertex `i` (0 outside the cylinder or when it was not active).
     #[must_use]
@@ -323,9 +329,7 @@ impl AxialTool {
             .zip(active.par_iter())
             .with_min_len(BIND_CHUNK)
             .for_each(|(((((segment, fraction), local), base), weight), &i)| {
-                if let Some((old, s)) =
-                    previous.and_then(|p| p.slot(&p.bind.slot, i).map(|s| (p.bind, s)))
-                {
+                if let Some((old, s)) = previous.and_then(|p| p.entry(i)) {
                     *segment = old.segment[s];
                     *fraction = old.fraction[s];
                     *local = old.local[s];

@@ -73,18 +73,25 @@ impl<'a, B> Reuse<'a, B> {
             stale: self.stale,
         }
     }
+}
 
-    /// The slot of vertex `i` in the earlier bind's compact arrays (`slot`, see
-    /// [`bind_slots`]) when its entry may be copied: `i` is not stale and had a slot.
+/// A bind that keeps its per-vertex data in compact arrays, with a slot per welded vertex
+/// (`u32::MAX` where the vertex was not active; see [`bind_slots`]).
+pub trait Slotted {
+    /// The slot of each welded vertex.
+    fn slots(&self) -> &[u32];
+}
+
+impl<'a, B: Slotted> Reuse<'a, B> {
+    /// The earlier bind and the slot of vertex `i` in its compact arrays, when `i`'s entry
+    /// may be copied: `i` is not stale and had a slot.
     #[must_use]
-    pub fn slot(&self, slot: &[u32], i: u32) -> Option<usize> {
+    pub fn entry(self, i: u32) -> Option<(&'a B, usize)> {
         if self.stale.get(i as usize).copied().unwrap_or(true) {
             return None;
         }
-        slot.get(i as usize)
-            .copied()
-            .filter(|&s| s != u32::MAX)
-            .map(|s| s as usize)
+        let s = *self.bind.slots().get(i as usize)?;
+        (s != u32::MAX).then_some((self.bind, s as usize))
     }
 }
 

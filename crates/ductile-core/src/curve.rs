@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all, bernstein_all_with_derivative};
-use crate::chunks::{BIND_CHUNK, Reuse, bind_slots};
+use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots};
 use crate::curve_pieces::CurvePieces;
 use crate::error::{CoreError, Result, check_finite_vec3};
 use crate::frames::PolylineIndex;
@@ -342,6 +342,12 @@ pub struct CurveBind {
     weights: Vec<f32>,
 }
 
+impl Slotted for CurveBind {
+    fn slots(&self) -> &[u32] {
+        &self.slot
+    }
+}
+
 impl CurveBind {
     /// The bound rest parameter of welded vertex `i` (`None` when it was not active).
     #[must_use]
@@ -379,9 +385,7 @@ impl CurveTool {
             .zip(active.par_iter())
             .with_min_len(BIND_CHUNK)
             .for_each(|((((param, offset), first), weights), &i)| {
-                if let Some((old, s)) =
-                    previous.and_then(|p| p.slot(&p.bind.slot, i).map(|s| (p.bind, s)))
-                {
+                if let Some((old, s)) = previous.and_then(|p| p.entry(i)) {
                     *param = old.params[s];
                     *offset = old.offsets[s];
                     *first = old.firsts[s];

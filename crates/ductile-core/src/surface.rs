@@ -19,7 +19,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE};
-use crate::chunks::{BIND_CHUNK, Reuse, bind_slots};
+use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots};
 use crate::curve_pieces::BasisPieces;
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
 use crate::tool::{BindInput, Deformer};
@@ -305,6 +305,12 @@ pub struct SurfaceBind {
     rest: Vec<Vec3>,
 }
 
+impl Slotted for SurfaceBind {
+    fn slots(&self) -> &[u32] {
+        &self.slot
+    }
+}
+
 impl SurfaceBind {
     /// The cached basis weights of bound point `k`.
     fn weights_of(&self, k: usize, b: &Bound) -> Weights<'_> {
@@ -477,9 +483,7 @@ impl ShapeSurfaceTool {
             .zip(active.par_iter())
             .with_min_len(BIND_CHUNK)
             .for_each(|(((point, weights), projects), &i)| {
-                if let Some((old, s)) =
-                    previous.and_then(|p| p.slot(&p.bind.slot, i).map(|s| (p.bind, s)))
-                {
+                if let Some((old, s)) = previous.and_then(|p| p.entry(i)) {
                     if s != UNPROJECTED as usize {
                         *point = old.points[s];
                         *projects = true;

@@ -959,11 +959,16 @@ impl MeshEvaluator {
             )?;
             // Deforming the vertices of `D` again costs more than a full application (which
             // runs in parallel chunks) once they are half of the active ones.
-            let at = self.dirty.positions_in(&binding.mask.indices);
-            if let Some(old) = matched.take_if(|o| {
-                2 * at.len() < binding.mask.len()
-                    && agrees_per_vertex(&r.layer.tool, &o.binding, &binding)
-            }) {
+            let refreshable = matched
+                .as_ref()
+                .is_some_and(|o| agrees_per_vertex(&r.layer.tool, &o.binding, &binding));
+            let at = if refreshable {
+                self.dirty.positions_in(&binding.mask.indices)
+            } else {
+                Vec::new()
+            };
+            if let Some(old) = matched.take_if(|_| refreshable && 2 * at.len() < binding.mask.len())
+            {
                 let stage = refresh(
                     &mut self.positions,
                     &mut self.dirty,

@@ -177,8 +177,7 @@ impl Gestures {
         match self.current {
             Some((id, g)) if id == response.id && dragging && !response.drag_started() => Some(g),
             _ if dragging => {
-                self.next += 1;
-                let g = (1 << 48) + self.next;
+                let g = self.fresh();
                 self.current = Some((response.id, g));
                 Some(g)
             }

@@ -106,6 +106,14 @@ impl<P> State<P> {
             .collect()
     }
 
+    /// The tool the last emitted operation sets (it must be a `SetTool`).
+    fn last_tool(&self) -> Tool {
+        match self.ops().last() {
+            Some(Operation::SetTool { new, .. }) => new.clone(),
+            other => panic!("the last operation sets no tool: {other:?}"),
+        }
+    }
+
     /// Applies the emitted commands to the document, as the Studio does after its UI pass.
     fn apply_commands(&mut self) {
         for c in std::mem::take(&mut self.commands) {
@@ -315,12 +323,8 @@ fn the_inspector_edits_a_tool_and_refuses_an_out_of_range_value() {
     // Structure: a second control point.
     h.get_by_label("+ point").click();
     h.run();
-    let ops = h.state().ops();
-    let Some(Operation::SetTool {
-        new: Tool::Ffsd(f), ..
-    }) = ops.last()
-    else {
-        panic!("{ops:?}")
+    let Tool::Ffsd(f) = h.state().last_tool() else {
+        panic!("an FFSD tool")
     };
     assert_eq!(f.points.len(), 2);
     h.state_mut().commands.clear();
@@ -890,13 +894,8 @@ fn a_spline_control_keeps_its_degree_and_gains_a_value_resampled() {
     h.get_by_label_contains("3 values");
     h.get_by_label("+").click();
     h.run();
-    let ops = h.state().ops();
-    let Some(Operation::SetTool {
-        new: Tool::Sketch(s),
-        ..
-    }) = ops.last()
-    else {
-        panic!("{ops:?}")
+    let Tool::Sketch(s) = h.state().last_tool() else {
+        panic!("a sketch tool")
     };
     let SketchMode::Bend {
         turning: Some(f), ..
@@ -941,13 +940,8 @@ fn a_constraint_on_a_vertex_the_mesh_lacks_is_refused_with_the_reason() {
     h.run();
     h.get_by_label("mesh vertex").click();
     h.run();
-    let ops = h.state().ops();
-    let Some(Operation::SetTool {
-        new: Tool::Dogme(d),
-        ..
-    }) = ops.last()
-    else {
-        panic!("{ops:?}")
+    let Tool::Dogme(d) = h.state().last_tool() else {
+        panic!("a DOGME tool")
     };
     assert_eq!(d.constraints[0].at, Anchor::Vertex(2));
     h.state_mut().apply_commands();
@@ -977,13 +971,8 @@ fn a_constraint_on_a_vertex_the_mesh_lacks_is_refused_with_the_reason() {
     h.run();
     h.get_by_label("free point").click();
     h.run();
-    let ops = h.state().ops();
-    let Some(Operation::SetTool {
-        new: Tool::Dogme(d),
-        ..
-    }) = ops.last()
-    else {
-        panic!("the repair is applied: {ops:?}")
+    let Tool::Dogme(d) = h.state().last_tool() else {
+        panic!("the repair is applied to the DOGME tool")
     };
     assert!(matches!(d.constraints[0].at, Anchor::Point(_)));
 }

@@ -162,11 +162,11 @@ fn structure(
 ) -> Option<(Tool, Option<egui::Response>)> {
     let mut t = tool.clone();
     let mut response = None;
-    let mesh = AnchorMesh::of(cx, name);
     let changed = match &mut t {
         Tool::Ffsd(f) => ffsd(ui, f),
-        Tool::Dogme(d) => dogme(ui, d, mesh.as_ref(), &mut response),
+        Tool::Dogme(d) => dogme(ui, d, AnchorMesh::of(cx, name).as_ref(), &mut response),
         Tool::DirectFfd(d) => {
+            let mesh = AnchorMesh::of(cx, name);
             let mut a = lattice_structure(ui, &mut d.lattice);
             lattice_hint(ui, &d.lattice);
             for (i, c) in d.constraints.iter_mut().enumerate() {
