@@ -32,7 +32,7 @@
 use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::lane::{LANES, Lane, Mask};
+use crate::lane::{LANES, Lane, Lanes3};
 
 use rayon::prelude::*;
 
@@ -209,127 +209,6 @@ impl HeightLimit {
             }
         };
         limited.select(zero, d)
-    }
-}
-
-/// A lane group of points in structure-of-arrays form: the lanes of the FFSD kernel.
-#[derive(Debug, Clone, Copy)]
-struct Lanes3 {
-    x: Lane,
-    y: Lane,
-    z: Lane,
-}
-
-impl Lanes3 {
-    const ZERO: Self = Self {
-        x: Lane::ZERO,
-        y: Lane::ZERO,
-        z: Lane::ZERO,
-    };
-
-    /// `v` in every lane.
-    #[inline(always)]
-    fn splat(v: Vec3) -> Self {
-        Self {
-            x: Lane::splat(v.x),
-            y: Lane::splat(v.y),
-            z: Lane::splat(v.z),
-        }
-    }
-
-    /// The positions of `active` (up to a lane group; the last one repeated to fill the lanes).
-    #[inline(always)]
-    fn gather(positions: &[Vec3], active: &[u32]) -> Self {
-        let mut lanes = Self::ZERO;
-        let last = active.len() - 1;
-        for j in 0..LANES {
-            lanes.set(j, positions[active[j.min(last)] as usize]);
-        }
-        lanes
-    }
-
-    /// Up to a lane group of points (the last one repeated to fill the lanes).
-    #[inline(always)]
-    fn load(points: &[Vec3]) -> Self {
-        let mut lanes = Self::ZERO;
-        let last = points.len() - 1;
-        for j in 0..LANES {
-            lanes.set(j, points[j.min(last)]);
-        }
-        lanes
-    }
-
-    /// Lane `j` set to `v`.
-    #[inline(always)]
-    fn set(&mut self, j: usize, v: Vec3) {
-        (self.x.0[j], self.y.0[j], self.z.0[j]) = (v.x, v.y, v.z);
-    }
-
-    /// Lane `j` as a vector.
-    #[inline(always)]
-    fn lane(&self, j: usize) -> Vec3 {
-        Vec3::new(
-            self.x.as_array()[j],
-            self.y.as_array()[j],
-            self.z.as_array()[j],
-        )
-    }
-
-    /// Writes the first `out.len()` lanes to `out`.
-    #[inline(always)]
-    fn write(&self, out: &mut [Vec3]) {
-        let (x, y, z) = (self.x.as_array(), self.y.as_array(), self.z.as_array());
-        for (j, o) in out.iter_mut().enumerate() {
-            *o = Vec3::new(x[j], y[j], z[j]);
-        }
-    }
-
-    #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        Self {
-            x: self.x + o.x,
-            y: self.y + o.y,
-            z: self.z + o.z,
-        }
-    }
-
-    #[inline(always)]
-    fn sub(self, o: Self) -> Self {
-        Self {
-            x: self.x - o.x,
-            y: self.y - o.y,
-            z: self.z - o.z,
-        }
-    }
-
-    #[inline(always)]
-    fn scale(self, k: Lane) -> Self {
-        Self {
-            x: self.x * k,
-            y: self.y * k,
-            z: self.z * k,
-        }
-    }
-
-    /// `x² + y² + z²`, summed in that order (as glam's `dot`).
-    #[inline(always)]
-    fn length_squared(&self) -> Lane {
-        self.x * self.x + self.y * self.y + self.z * self.z
-    }
-
-    #[inline(always)]
-    fn length(&self) -> Lane {
-        self.length_squared().sqrt()
-    }
-
-    /// `other` in the lanes where `mask` is set, `self` elsewhere.
-    #[inline(always)]
-    fn select(self, mask: Mask, other: Self) -> Self {
-        Self {
-            x: mask.select(other.x, self.x),
-            y: mask.select(other.y, self.y),
-            z: mask.select(other.z, self.z),
-        }
     }
 }
 

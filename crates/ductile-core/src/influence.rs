@@ -17,6 +17,7 @@ use serde::{Deserialize, Serialize};
 use crate::chunks::{CHUNK, PARALLEL_THRESHOLD};
 use crate::error::{CoreError, Result, check_finite};
 use crate::spline::SplineControl;
+use crate::volume_lanes::{Ids, LaneInfluence};
 
 /// The shape of an influence volume in its own local frame (centred at the origin).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -470,6 +471,13 @@ impl Influence {
             }
         };
         let candidates = area.map_or(n, <[u32]>::len);
+        // Sixteen vertices at a time where the falloff has a lane form (the same bits; a
+        // custom spline falloff goes vertex by vertex).
+        let lanes = LaneInfluence::new(self, &boxes)
+            .filter(|_| area.is_none_or(|a| a.iter().all(|&i| (i as usize) < n)));
+        if let Some(lanes) = &lanes {
+            return gather_lanes(lanes, area, n, positions, reuse);
+        }
         if candidates < PARALLEL_THRESHOLD {
             return match area {
                 Some(area) => gather(
@@ -506,24 +514,7 @@ impl Influence {
                 })
                 .collect(),
         };
-        let len = parts.iter().map(Mask::len).sum();
-        let mut mask = Mask {
-            indices: vec![0; len],
-            weights: vec![0.0; len],
-        };
-        let mut jobs = Vec::with_capacity(parts.len());
-        let (mut indices, mut weights) = (&mut mask.indices[..], &mut mask.weights[..]);
-        for p in &parts {
-            let (i, rest_i) = std::mem::take(&mut indices).split_at_mut(p.len());
-            let (w, rest_w) = std::mem::take(&mut weights).split_at_mut(p.len());
-            jobs.push((i, w, p));
-            (indices, weights) = (rest_i, rest_w);
-        }
-        jobs.into_par_iter().for_each(|(i, w, p)| {
-            i.copy_from_slice(&p.indices);
-            w.copy_from_slice(&p.weights);
-        });
-        mask
+        join(&parts)
     }
 
     /// Checks `inner` and every volume. `what` names the layer in errors.
@@ -541,6 +532,59 @@ impl Influence {
         }
         self.falloff.validate(what)
     }
+}
+
+/// [`Influence::mask_in`] on the lanes: the candidates (`area`, all in range, or every
+/// vertex) in parallel chunks above [`PARALLEL_THRESHOLD`], joined in order.
+fn gather_lanes(
+    lanes: &LaneInfluence,
+    area: Option<&[u32]>,
+    n: usize,
+    positions: &[Vec3],
+    reuse: Option<(&Mask, &[bool])>,
+) -> Mask {
+    let gather = |ids| lanes.gather(ids, positions, reuse);
+    match area {
+        Some(area) if area.len() < PARALLEL_THRESHOLD => gather(Ids::List(area)),
+        None if n < PARALLEL_THRESHOLD => gather(Ids::Range(0, n as u32)),
+        Some(area) => join(
+            &area
+                .par_chunks(CHUNK)
+                .map(|c| gather(Ids::List(c)))
+                .collect::<Vec<_>>(),
+        ),
+        None => join(
+            &(0..n.div_ceil(CHUNK))
+                .into_par_iter()
+                .map(|c| {
+                    let end = ((c + 1) * CHUNK).min(n);
+                    gather(Ids::Range((c * CHUNK) as u32, end as u32))
+                })
+                .collect::<Vec<_>>(),
+        ),
+    }
+}
+
+/// The masks of consecutive chunks, copied in order into one (in parallel).
+fn join(parts: &[Mask]) -> Mask {
+    let len = parts.iter().map(Mask::len).sum();
+    let mut mask = Mask {
+        indices: vec![0; len],
+        weights: vec![0.0; len],
+    };
+    let mut jobs = Vec::with_capacity(parts.len());
+    let (mut indices, mut weights) = (&mut mask.indices[..], &mut mask.weights[..]);
+    for p in parts {
+        let (i, rest_i) = std::mem::take(&mut indices).split_at_mut(p.len());
+        let (w, rest_w) = std::mem::take(&mut weights).split_at_mut(p.len());
+        jobs.push((i, w, p));
+        (indices, weights) = (rest_i, rest_w);
+    }
+    jobs.into_par_iter().for_each(|(i, w, p)| {
+        i.copy_from_slice(&p.indices);
+        w.copy_from_slice(&p.weights);
+    });
+    mask
 }
 
 #[cfg(test)]
@@ -868,6 +912,100 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+        /// The lane masks give every vertex the bits of `volume_weight`, for unions of up to
+        /// three placed spheres, boxes, capsules and tubes, every lane falloff, any inner plateau,
+        /// inverted or not, over a vertex list or every vertex, short or parallel.
+        #[test]
+        fn lane_masks_have_the_bits_of_the_per_vertex_weights(
+            seed in 0_u64..1_000_000,
+            count in 1_usize..4,
+            falloff in 0_usize..3,
+            inner in 0.0_f32..0.95,
+            invert: bool,
+            with_area: bool,
+            long: bool,
+        ) {
+            let mut state = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            let mut r = move || {
+                state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+                ((state >> 40) as f32) / (1u64 << 24) as f32
+            };
+            let volumes: Vec<Volume> = (0..count)
+                .map(|k| {
+                    let shape = match (seed as usize + k) % 4 {
+                        0 => Shape::Sphere { radius: 0.2 + r() },
+                        1 => Shape::Box {
+                            half_extents: Vec3::new(0.1 + r(), 0.1 + r(), 0.1 + r()),
+                        },
+                        2 => Shape::Capsule {
+                            radius: 0.1 + 0.5 * r(),
+                            half_height: if r() < 0.2 { 0.0 } else { r() },
+                        },
+                        _ => {
+                            // A repeated point makes a segment of length 0.
+                            let mut points: Vec<Vec3> = (0..2 + (seed as usize % 4))
+                                .map(|_| Vec3::new(r() - 0.5, r() - 0.5, r() - 0.5))
+                                .collect();
+                            points.push(*points.last().unwrap());
+                            let radii = points.iter().map(|_| 0.05 + 0.4 * r()).collect();
+                            Shape::Tube { points, radii }
+                        }
+                    };
+                    let placement = Affine3A::from_scale_rotation_translation(
+                        Vec3::new(0.3 + 2.0 * r(), 0.3 + 2.0 * r(), 0.3 + 2.0 * r()),
+                        glam::Quat::from_euler(glam::EulerRot::XYZ, 6.0 * r(), 6.0 * r(), 6.0 * r()),
+                        Vec3::new(2.0 * r() - 1.0, 2.0 * r() - 1.0, 2.0 * r() - 1.0),
+                    );
+                    Volume::new(shape, placement, "v").unwrap()
+                })
+                .collect();
+            let n = if long { PARALLEL_THRESHOLD + 3001 } else { 997 };
+            let positions: Vec<Vec3> = (0..n)
+                .map(|_| Vec3::new(4.0 * r() - 2.0, 4.0 * r() - 2.0, 4.0 * r() - 2.0))
+                .collect();
+            let inf = Influence {
+                volumes,
+                area: with_area.then(|| (0..n as u32).filter(|i| i % 3 != 1).collect()),
+                falloff: [Falloff::None, Falloff::Linear, Falloff::Smooth][falloff].clone(),
+                inner,
+                invert,
+            };
+            let m = inf.mask(&positions);
+            let candidates: Vec<u32> = match &inf.area {
+                Some(a) => a.clone(),
+                None => (0..n as u32).collect(),
+            };
+            let expected: Vec<(u32, u32)> = candidates
+                .into_iter()
+                .map(|i| (i, inf.volume_weight(positions[i as usize])))
+                .filter(|&(_, w)| w > 0.0)
+                .map(|(i, w)| (i, w.to_bits()))
+                .collect();
+            let got: Vec<(u32, u32)> = m
+                .indices
+                .iter()
+                .zip(&m.weights)
+                .map(|(&i, w)| (i, w.to_bits()))
+                .collect();
+            proptest::prop_assert_eq!(got, expected);
+            // Made from this mask after a few runs of vertices moved (some lane groups
+            // without a stale vertex, some partly stale), it is the fresh mask there.
+            let stale: Vec<bool> = (0..n).map(|v| (v / 5) % 7 == 3 || v % 31 == 0).collect();
+            let after: Vec<Vec3> = positions
+                .iter()
+                .zip(&stale)
+                .map(|(&p, &s)| if s { p * 0.8 + Vec3::new(0.1, -0.2, 0.05) } else { p })
+                .collect();
+            let area = inf.area.as_deref();
+            proptest::prop_assert_eq!(
+                inf.mask_reusing(area, &after, &m, &stale),
+                inf.mask_in(area, &after)
+            );
         }
     }
 }

@@ -17,6 +17,8 @@
 use core::f32::consts::{LOG2_E, SQRT_2};
 use core::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
+use glam::Vec3;
+
 /// Lanes per group.
 pub(crate) const LANES: usize = 16;
 
@@ -110,6 +112,20 @@ impl Lane {
     #[must_use]
     pub(crate) fn simd_ge(self, o: Self) -> Mask {
         Mask(each!(|i| full(self.0[i] >= o.0[i])))
+    }
+
+    /// `|x|`: the sign bit cleared, as `f32::abs`.
+    #[inline(always)]
+    #[must_use]
+    pub(crate) fn abs(self) -> Self {
+        Self::from_bits(each!(|i| self.0[i].to_bits() & 0x7FFF_FFFF))
+    }
+
+    /// The greater lane, as glam's `max_element` compares: `self > o ? self : o`.
+    #[inline(always)]
+    #[must_use]
+    pub(crate) fn greater(self, o: Self) -> Self {
+        self.simd_gt(o).select(self, o)
     }
 
     /// `√x`, exactly rounded.
@@ -372,6 +388,128 @@ impl Not for Mask {
     #[inline(always)]
     fn not(self) -> Self {
         Self(each!(|i| !self.0[i]))
+    }
+}
+
+/// A lane group of points in structure-of-arrays form: the lanes of the FFSD and
+/// volume-mask kernels.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Lanes3 {
+    pub(crate) x: Lane,
+    pub(crate) y: Lane,
+    pub(crate) z: Lane,
+}
+
+impl Lanes3 {
+    pub(crate) const ZERO: Self = Self {
+        x: Lane::ZERO,
+        y: Lane::ZERO,
+        z: Lane::ZERO,
+    };
+
+    /// `v` in every lane.
+    #[inline(always)]
+    pub(crate) fn splat(v: Vec3) -> Self {
+        Self {
+            x: Lane::splat(v.x),
+            y: Lane::splat(v.y),
+            z: Lane::splat(v.z),
+        }
+    }
+
+    /// The positions of `active` (up to a lane group; the last one repeated to fill the lanes).
+    #[inline(always)]
+    pub(crate) fn gather(positions: &[Vec3], active: &[u32]) -> Self {
+        let mut lanes = Self::ZERO;
+        let last = active.len() - 1;
+        for j in 0..LANES {
+            lanes.set(j, positions[active[j.min(last)] as usize]);
+        }
+        lanes
+    }
+
+    /// Up to a lane group of points (the last one repeated to fill the lanes).
+    #[inline(always)]
+    pub(crate) fn load(points: &[Vec3]) -> Self {
+        let mut lanes = Self::ZERO;
+        let last = points.len() - 1;
+        for j in 0..LANES {
+            lanes.set(j, points[j.min(last)]);
+        }
+        lanes
+    }
+
+    /// Lane `j` set to `v`.
+    #[inline(always)]
+    pub(crate) fn set(&mut self, j: usize, v: Vec3) {
+        (self.x.0[j], self.y.0[j], self.z.0[j]) = (v.x, v.y, v.z);
+    }
+
+    /// Lane `j` as a vector.
+    #[inline(always)]
+    pub(crate) fn lane(&self, j: usize) -> Vec3 {
+        Vec3::new(
+            self.x.as_array()[j],
+            self.y.as_array()[j],
+            self.z.as_array()[j],
+        )
+    }
+
+    /// Writes the first `out.len()` lanes to `out`.
+    #[inline(always)]
+    pub(crate) fn write(&self, out: &mut [Vec3]) {
+        let (x, y, z) = (self.x.as_array(), self.y.as_array(), self.z.as_array());
+        for (j, o) in out.iter_mut().enumerate() {
+            *o = Vec3::new(x[j], y[j], z[j]);
+        }
+    }
+
+    #[inline(always)]
+    pub(crate) fn add(self, o: Self) -> Self {
+        Self {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+
+    #[inline(always)]
+    pub(crate) fn sub(self, o: Self) -> Self {
+        Self {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+
+    #[inline(always)]
+    pub(crate) fn scale(self, k: Lane) -> Self {
+        Self {
+            x: self.x * k,
+            y: self.y * k,
+            z: self.z * k,
+        }
+    }
+
+    /// `x² + y² + z²`, summed in that order (as glam's `dot`).
+    #[inline(always)]
+    pub(crate) fn length_squared(&self) -> Lane {
+        self.x * self.x + self.y * self.y + self.z * self.z
+    }
+
+    #[inline(always)]
+    pub(crate) fn length(&self) -> Lane {
+        self.length_squared().sqrt()
+    }
+
+    /// `other` in the lanes where `mask` is set, `self` elsewhere.
+    #[inline(always)]
+    pub(crate) fn select(self, mask: Mask, other: Self) -> Self {
+        Self {
+            x: mask.select(other.x, self.x),
+            y: mask.select(other.y, self.y),
+            z: mask.select(other.z, self.z),
+        }
     }
 }
 

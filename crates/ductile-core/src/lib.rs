@@ -31,6 +31,7 @@ pub mod spline;
 pub mod stack;
 pub mod surface;
 pub mod tool;
+mod volume_lanes;
 
 /// The types most users need.
 pub mod prelude {
