@@ -79,7 +79,8 @@ impl AdjustLast {
         gesture: u64,
     ) {
         let mut l = lattice.clone();
-        if !lattice_structure(ui, &mut l) || l == *lattice {
+        // The add's gesture holds every change, whichever field made it.
+        if !lattice_structure(ui, &mut l, &mut None) || l == *lattice {
             return;
         }
         if let Err(e) = Tool::Lattice(l.clone()).validate(&format!("lattice '{name}'")) {

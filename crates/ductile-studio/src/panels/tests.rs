@@ -80,6 +80,8 @@ struct State<P> {
     requests: Vec<PanelRequest>,
     /// The rest meshes the panels see (none unless a test loads one).
     meshes: Vec<(String, std::sync::Arc<ductile_core::mesh::RestMesh>)>,
+    /// The clock the panels read, in seconds (a test advances it).
+    now: f64,
 }
 
 impl<P> State<P> {
@@ -92,6 +94,7 @@ impl<P> State<P> {
             commands: Vec::new(),
             requests: Vec::new(),
             meshes: Vec::new(),
+            now: 0.0,
         }
     }
 
@@ -164,7 +167,7 @@ fn harness<'a, P: 'a>(
                     commands: Vec::new(),
                     requests: Vec::new(),
                     gestures: &mut s.gestures,
-                    now: 0.0,
+                    now: s.now,
                     meshes: &s.meshes,
                 };
                 show(&mut s.panel, ui, &mut cx);
@@ -370,6 +373,54 @@ fn the_history_panel_steps_and_jumps() {
     h.get_by_label("weight 0.4").click();
     h.run();
     assert!(matches!(h.state().commands[..], [DocumentCommand::Jump(2)]));
+}
+
+#[test]
+fn the_history_panel_plays_at_its_speed_and_pauses() {
+    let mut state = State::new(HistoryPanel::default());
+    for w in [0.2_f32, 0.4, 0.6, 0.8] {
+        let op = Operation::set_layer_weight(state.doc.document(), "m", 0, w).unwrap();
+        state.doc.apply(op, format!("weight {w}"), None).unwrap();
+    }
+    state.doc.jump(0).unwrap();
+    let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
+    h.run();
+    // At 2 steps per second (the default), a step every 0.5 s from the press of ▶. While it
+    // plays the panel asks for a repaint every frame: one frame at a time.
+    h.get_by_label("▶").click();
+    h.step();
+    let mut steps = Vec::new();
+    for frame in 1..=6 {
+        h.state_mut().now = 0.25 * f64::from(frame);
+        h.step();
+        if let [DocumentCommand::Jump(k)] = h.state().commands[..] {
+            steps.push((h.state().now, k));
+        }
+        h.state_mut().apply_commands();
+    }
+    assert_eq!(steps, [(0.5, 1), (1.0, 2), (1.5, 3)]);
+    // Faster: 4 steps per second, then ⏸ stops it where it is.
+    h.state_mut().panel.speed = 4.0;
+    h.state_mut().now = 1.75;
+    h.step();
+    assert!(matches!(h.state().commands[..], [DocumentCommand::Jump(4)]));
+    h.state_mut().apply_commands();
+    h.step();
+    assert!(!h.state().panel.is_playing(), "it stops at the last step");
+    h.state_mut().doc.jump(1).unwrap();
+    h.step();
+    h.get_by_label("▶").click();
+    h.step();
+    h.state_mut().now = 2.0;
+    h.step();
+    assert!(matches!(h.state().commands[..], [DocumentCommand::Jump(2)]));
+    h.state_mut().apply_commands();
+    h.get_by_label("⏸").click();
+    h.step();
+    h.state_mut().now = 10.0;
+    h.step();
+    assert!(h.state().commands.is_empty(), "paused");
+    assert_eq!(h.state().doc.history().cursor(), 2);
 }
 
 #[test]
@@ -845,6 +896,38 @@ fn an_inspector_field_drag_is_one_undo_step() {
     assert!(f.points[0].gamma > 0.5, "{}", f.points[0].gamma);
 }
 
+#[test]
+fn an_inspector_lattice_count_drag_is_one_undo_step() {
+    let mut state = State::new(Inspector::default());
+    let place = Placement::around(&[Vec3::splat(-1.0), Vec3::ONE]).unwrap();
+    let added = crate::authoring::add_operation(
+        state.doc.document(),
+        &Selection::default(),
+        "m",
+        AddRequest::Tool(NewTool::Lattice(LatticeKind::Bernstein)),
+        &place,
+    )
+    .unwrap()
+    .unwrap();
+    state.doc.apply(added.op, "", None).unwrap();
+    let added = state.doc.document().clone();
+    state.selection.select(Some("lattice".to_owned()));
+    let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
+    h.run();
+    // The first count (3) dragged 60 points to the right over 12 frames: several integer
+    // changes, each applied as the Studio does, and one undo step.
+    let at = h.get_all(spin_button(3.0)).next().unwrap().rect().center();
+    slow_drag(&mut h, at, at + egui::vec2(60.0, 0.0), 12, true);
+    let doc = &h.state().doc;
+    assert_eq!(doc.history().len(), 2, "{:#?}", doc.history().entries());
+    let NodeKind::Tool(Tool::Lattice(l)) = &doc.document().node("lattice").unwrap().kind else {
+        panic!("the lattice")
+    };
+    assert!(l.counts.0 > 4 && l.counts.1 == 3, "{:?}", l.counts);
+    h.state_mut().doc.undo().unwrap();
+    assert_eq!(h.state().doc.document(), &added);
+}
+
 /// The sketch tool of [`a_sketch_tool_asks_for_its_strokes_to_be_redrawn`] in bend mode
 /// with a turning control `turning`.
 fn sketch_with_turning(turning: ductile_core::spline::SplineControl) -> Tool {
@@ -908,6 +991,70 @@ fn a_spline_control_keeps_its_degree_and_gains_a_value_resampled() {
     for (v, s) in f.values.iter().zip([0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0]) {
         assert!((v - turning.eval(s)).abs() < 1e-6, "{:?}", f.values);
     }
+}
+
+#[test]
+fn dragging_an_f_s_handle_changes_its_value_in_one_undo_step() {
+    use ductile_core::sketch::tool::SketchMode;
+    use ductile_core::spline::SplineControl;
+    let turning = SplineControl {
+        values: vec![0.0, 0.8, 1.0],
+        degree: 1,
+    };
+    let mut state = State::new(Inspector::default());
+    let op = Operation::set_tool(state.doc.document(), "p", sketch_with_turning(turning)).unwrap();
+    state.doc.apply(op, "", None).unwrap();
+    state.selection.select(Some("p".to_owned()));
+    let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
+    h.run();
+    // The editor (250 × 110 points) sits right above the values' fields, its left edge at
+    // theirs. Its vertical range is [0, 1] padded by 15 %: [−0.15, 1.15]. The handle of
+    // c1 = 0.8 is at s = 0.5 (its Greville abscissa for degree 1).
+    let c1 = h.get(spin_button(0.8)).rect();
+    let c0 = h
+        .get_all(spin_button(0.0))
+        .map(|n| n.rect())
+        .find(|r| (r.top() - c1.top()).abs() < 1.0 && r.left() < c1.left())
+        .unwrap();
+    let spacing = egui::Style::default().spacing.item_spacing.y;
+    let plot = egui::Rect::from_min_size(
+        egui::pos2(c0.left(), c1.top() - spacing - 110.0),
+        egui::vec2(250.0, 110.0),
+    );
+    let handle = egui::pos2(
+        plot.left() + 0.5 * plot.width(),
+        plot.bottom() - (0.8 + 0.15) / 1.3 * plot.height(),
+    );
+    // 22 points up over 11 frames, each frame's edit applied: + 22/110 · 1.3 = 0.26.
+    slow_drag(&mut h, handle, handle - egui::vec2(0.0, 22.0), 11, true);
+    let doc = &h.state().doc;
+    assert_eq!(doc.history().len(), 2, "{:#?}", doc.history().entries());
+    let NodeKind::Tool(Tool::Sketch(s)) = &doc.document().node("p").unwrap().kind else {
+        panic!("the sketch tool")
+    };
+    let SketchMode::Bend {
+        turning: Some(f), ..
+    } = &s.mode
+    else {
+        panic!("{:?}", s.mode)
+    };
+    assert!((f.values[1] - 1.06).abs() < 0.02, "{:?}", f.values);
+    assert_eq!((f.values[0], f.values[2]), (0.0, 1.0));
+    h.state_mut().doc.undo().unwrap();
+    let NodeKind::Tool(Tool::Sketch(s)) = &h.state().doc.document().node("p").unwrap().kind else {
+        panic!("the sketch tool")
+    };
+    let SketchMode::Bend {
+        turning: Some(f), ..
+    } = &s.mode
+    else {
+        panic!("{:?}", s.mode)
+    };
+    assert_eq!(
+        f.values,
+        [0.0, 0.8, 1.0],
+        "one Ctrl+Z undoes the whole drag"
+    );
 }
 
 #[test]

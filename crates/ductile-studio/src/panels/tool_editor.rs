@@ -52,15 +52,35 @@ fn choice(
     (picked != current).then_some(picked)
 }
 
+/// Adds `widget`; when it changed its value, keeps its response in `response` (so that a
+/// drag of it is one undo step, [`PanelContext::apply_in_gesture`]) and returns true.
+fn dragged(
+    ui: &mut egui::Ui,
+    widget: impl egui::Widget,
+    response: &mut Option<egui::Response>,
+) -> bool {
+    let r = ui.add(widget);
+    let changed = r.changed();
+    if changed {
+        *response = Some(r);
+    }
+    changed
+}
+
+/// A labelled count field in `range`; see [`dragged`].
 fn count_edit(
     ui: &mut egui::Ui,
     label: &str,
     v: &mut u32,
     range: std::ops::RangeInclusive<u32>,
+    response: &mut Option<egui::Response>,
 ) -> bool {
     ui.label(label);
-    ui.add(egui::DragValue::new(v).range(range).speed(0.05))
-        .changed()
+    dragged(
+        ui,
+        egui::DragValue::new(v).range(range).speed(0.05),
+        response,
+    )
 }
 
 impl ToolEditor {
@@ -167,7 +187,7 @@ fn structure(
         Tool::Dogme(d) => dogme(ui, d, AnchorMesh::of(cx, name).as_ref(), &mut response),
         Tool::DirectFfd(d) => {
             let mesh = AnchorMesh::of(cx, name);
-            let mut a = lattice_structure(ui, &mut d.lattice);
+            let mut a = lattice_structure(ui, &mut d.lattice, &mut response);
             lattice_hint(ui, &d.lattice);
             for (i, c) in d.constraints.iter_mut().enumerate() {
                 ui.horizontal(|ui| {
@@ -205,7 +225,7 @@ fn structure(
             a || b
         }
         Tool::Lattice(l) => {
-            let c = lattice_structure(ui, l);
+            let c = lattice_structure(ui, l, &mut response);
             lattice_hint(ui, l);
             c
         }
@@ -214,8 +234,8 @@ fn structure(
             response = r;
             c
         }
-        Tool::Curve(c) => curve(ui, c),
-        Tool::ShapeSurface(s) => surface(ui, s),
+        Tool::Curve(c) => curve(ui, c, &mut response),
+        Tool::ShapeSurface(s) => surface(ui, s, &mut response),
         Tool::Sketch(s) => {
             if ui
                 .button("Redraw strokes…")
@@ -513,15 +533,20 @@ fn dogme(
 }
 
 /// The lattice's structure: control point counts (a resize keeps the moved points where it
-/// can, [`resized_lattice`]), basis and degrees. Returns true when it changed.
-pub fn lattice_structure(ui: &mut egui::Ui, l: &mut LatticeTool) -> bool {
+/// can, [`resized_lattice`]), basis and degrees. Returns true when it changed; a changed
+/// field's response goes to `response` (see [`dragged`]).
+pub fn lattice_structure(
+    ui: &mut egui::Ui,
+    l: &mut LatticeTool,
+    response: &mut Option<egui::Response>,
+) -> bool {
     let mut changed = false;
     ui.horizontal(|ui| {
         let mut counts = l.counts;
         let mut any = false;
-        any |= count_edit(ui, "points", &mut counts.0, 2..=16);
-        any |= count_edit(ui, "×", &mut counts.1, 2..=16);
-        any |= count_edit(ui, "×", &mut counts.2, 2..=16);
+        any |= count_edit(ui, "points", &mut counts.0, 2..=16, response);
+        any |= count_edit(ui, "×", &mut counts.1, 2..=16, response);
+        any |= count_edit(ui, "×", &mut counts.2, 2..=16, response);
         if any && counts != l.counts {
             *l = resized_lattice(l, counts);
             changed = true;
@@ -544,7 +569,7 @@ pub fn lattice_structure(ui: &mut egui::Ui, l: &mut LatticeTool) -> bool {
         if let LatticeBasis::BSpline { degree } = &mut l.basis {
             ui.label("degrees");
             for d in [&mut degree.0, &mut degree.1, &mut degree.2] {
-                changed |= ui.add(egui::DragValue::new(d).speed(0.05)).changed();
+                changed |= dragged(ui, egui::DragValue::new(d).speed(0.05), response);
             }
         }
     });
@@ -585,9 +610,8 @@ fn axial(ui: &mut egui::Ui, a: &mut AxialTool) -> (bool, Option<egui::Response>)
             changed = true;
         }
         if let AxisShape::BSpline { degree } = &mut a.shape {
-            changed |= ui
-                .add(egui::DragValue::new(degree).prefix("degree ").speed(0.05))
-                .changed();
+            let field = egui::DragValue::new(degree).prefix("degree ").speed(0.05);
+            changed |= dragged(ui, field, &mut response);
         }
         ui.label("falloff");
         changed |= falloff_choice(ui, "axial-falloff", &mut a.falloff);
@@ -635,7 +659,7 @@ fn extend_axis(points: &mut Vec<AxisPoint>) {
     }
 }
 
-fn curve(ui: &mut egui::Ui, c: &mut CurveTool) -> bool {
+fn curve(ui: &mut egui::Ui, c: &mut CurveTool, response: &mut Option<egui::Response>) -> bool {
     let mut changed = false;
     ui.horizontal(|ui| {
         ui.label("basis");
@@ -656,9 +680,8 @@ fn curve(ui: &mut egui::Ui, c: &mut CurveTool) -> bool {
             changed = true;
         }
         if let CurveBasis::BSpline { degree } = &mut c.basis {
-            changed |= ui
-                .add(egui::DragValue::new(degree).prefix("degree ").speed(0.05))
-                .changed();
+            let field = egui::DragValue::new(degree).prefix("degree ").speed(0.05);
+            changed |= dragged(ui, field, response);
         }
     });
     ui.horizontal(|ui| {
@@ -682,12 +705,16 @@ fn curve(ui: &mut egui::Ui, c: &mut CurveTool) -> bool {
     changed
 }
 
-fn surface(ui: &mut egui::Ui, s: &mut ShapeSurfaceTool) -> bool {
+fn surface(
+    ui: &mut egui::Ui,
+    s: &mut ShapeSurfaceTool,
+    response: &mut Option<egui::Response>,
+) -> bool {
     let mut changed = false;
     ui.horizontal(|ui| {
         let mut counts = s.counts;
-        let mut any = count_edit(ui, "points", &mut counts.0, 2..=32);
-        any |= count_edit(ui, "×", &mut counts.1, 2..=32);
+        let mut any = count_edit(ui, "points", &mut counts.0, 2..=32, response);
+        any |= count_edit(ui, "×", &mut counts.1, 2..=32, response);
         if any && counts != s.counts {
             s.counts = counts;
             let (u, v) = counts;
@@ -697,12 +724,16 @@ fn surface(ui: &mut egui::Ui, s: &mut ShapeSurfaceTool) -> bool {
             changed = true;
         }
         ui.label("degrees");
-        changed |= ui
-            .add(egui::DragValue::new(&mut s.degree.0).speed(0.05))
-            .changed();
-        changed |= ui
-            .add(egui::DragValue::new(&mut s.degree.1).speed(0.05))
-            .changed();
+        changed |= dragged(
+            ui,
+            egui::DragValue::new(&mut s.degree.0).speed(0.05),
+            response,
+        );
+        changed |= dragged(
+            ui,
+            egui::DragValue::new(&mut s.degree.1).speed(0.05),
+            response,
+        );
     });
     changed
 }
