@@ -811,18 +811,31 @@ mod tests {
                 })
                 .collect();
             let stale: Vec<bool> = (0..n).map(moved).collect();
-            for (area, invert) in [
-                (None, false),
-                (None, true),
+            // A smooth falloff takes the lanes; a custom curve the vertex-by-vertex path.
+            let curve = Falloff::Curve(SplineControl {
+                values: vec![0.0, 0.3, 1.0],
+                degree: 2,
+            });
+            for (area, invert, falloff) in [
+                (None, false, Falloff::Smooth),
+                (None, true, Falloff::Smooth),
                 (
                     Some((0..n as u32).filter(|v| v % 3 != 0).collect::<Vec<_>>()),
                     false,
+                    Falloff::Smooth,
+                ),
+                (None, false, curve.clone()),
+                (None, true, curve.clone()),
+                (
+                    Some((0..n as u32).filter(|v| v % 3 != 0).collect::<Vec<_>>()),
+                    false,
+                    curve.clone(),
                 ),
             ] {
                 let inf = Influence {
                     volumes: vec![vol.clone()],
                     area,
-                    falloff: Falloff::Smooth,
+                    falloff,
                     inner: 0.2,
                     invert,
                 };
@@ -964,7 +977,8 @@ mod tests {
                     Volume::new(shape, placement, "v").unwrap()
                 })
                 .collect();
-            let n = if long { PARALLEL_THRESHOLD + 3001 } else { 997 };
+            // Long enough that the area (two thirds of the vertices) goes parallel too.
+            let n = if long { 2 * PARALLEL_THRESHOLD + 3001 } else { 997 };
             let positions: Vec<Vec3> = (0..n)
                 .map(|_| Vec3::new(4.0 * r() - 2.0, 4.0 * r() - 2.0, 4.0 * r() - 2.0))
                 .collect();

@@ -142,7 +142,8 @@ impl PanelContext<'_> {
 #[derive(bevy::prelude::Resource, Debug)]
 pub struct Gestures {
     next: u64,
-    current: Option<(egui::Id, u64)>,
+    /// The widget of the current gesture, when its press started, and the gesture's id.
+    current: Option<(egui::Id, Option<f64>, u64)>,
 }
 
 impl Default for Gestures {
@@ -170,20 +171,30 @@ impl Gestures {
         (1 << 48) + self.next
     }
 
-    /// The gesture of the widget behind `response`, new when its drag started or another
-    /// widget had the last one.
+    /// The gesture of the widget behind `response`: the current one while the same press
+    /// drags the same widget, else a new one. A drag's first change may come frames after
+    /// the press (an integer field moves after several points), so the press's start time
+    /// tells two drags of one widget apart; on the release frame the press has ended and
+    /// the widget's current gesture goes on.
     pub fn for_widget(&mut self, response: &egui::Response) -> Option<u64> {
         let dragging = response.dragged() || response.drag_stopped();
+        if !dragging {
+            self.current = None;
+            return None;
+        }
+        let press = response.ctx.input(|i| i.pointer.press_start_time());
         match self.current {
-            Some((id, g)) if id == response.id && dragging && !response.drag_started() => Some(g),
-            _ if dragging => {
-                let g = self.fresh();
-                self.current = Some((response.id, g));
+            Some((id, started, g))
+                if id == response.id
+                    && !response.drag_started()
+                    && (press.is_none() || press == started) =>
+            {
                 Some(g)
             }
             _ => {
-                self.current = None;
-                None
+                let g = self.fresh();
+                self.current = Some((response.id, press, g));
+                Some(g)
             }
         }
     }

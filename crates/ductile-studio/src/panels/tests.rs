@@ -897,7 +897,7 @@ fn an_inspector_field_drag_is_one_undo_step() {
 }
 
 #[test]
-fn an_inspector_lattice_count_drag_is_one_undo_step() {
+fn each_drag_of_a_lattice_count_field_is_one_undo_step() {
     let mut state = State::new(Inspector::default());
     let place = Placement::around(&[Vec3::splat(-1.0), Vec3::ONE]).unwrap();
     let added = crate::authoring::add_operation(
@@ -924,6 +924,23 @@ fn an_inspector_lattice_count_drag_is_one_undo_step() {
         panic!("the lattice")
     };
     assert!(l.counts.0 > 4 && l.counts.1 == 3, "{:?}", l.counts);
+    let first = l.counts;
+    // A second drag of the same field is a step of its own: undo takes back only it.
+    let at = h
+        .get_all(spin_button(f64::from(first.0)))
+        .next()
+        .unwrap()
+        .rect()
+        .center();
+    slow_drag(&mut h, at, at + egui::vec2(40.0, 0.0), 8, true);
+    let doc = &h.state().doc;
+    assert_eq!(doc.history().len(), 3, "{:#?}", doc.history().entries());
+    h.state_mut().doc.undo().unwrap();
+    let NodeKind::Tool(Tool::Lattice(l)) = &h.state().doc.document().node("lattice").unwrap().kind
+    else {
+        panic!("the lattice")
+    };
+    assert_eq!(l.counts, first);
     h.state_mut().doc.undo().unwrap();
     assert_eq!(h.state().doc.document(), &added);
 }
