@@ -439,8 +439,27 @@ def story_sketch(studio):
     expect(ramp > 100, "no region of interest (blue end of the s(v) ramp) after the "
                        "reference stroke")
     # The rigid part's orange, lit: red high, blue well below it.
-    rigid = sum(1 for _, _, (r, g, b) in pixels(roi) if r > 230 and g > 140 and r - b > 80)
+    rigid = rigid_pixels(roi)
     expect(rigid > 50, "the hand beyond the stroke is not shown as a rigid part")
+    # C and a line across the forearm: a cut line, the part beyond it rigid too.
+    studio.key("c")
+    time.sleep(0.5)
+    studio.drag([(707, 315), (719, 308), (731, 300), (743, 292), (755, 285)], steps=6)
+    cut = studio.shot("3b-cut-line", settle=3.0)
+    expect(rigid_pixels(cut) > rigid + 100,
+           f"the cut line across the forearm made no more of it rigid ({rigid} orange pixels "
+           f"before, {rigid_pixels(cut)} after)")
+    # Escape cancels the sketch: the ramp goes, and nothing was added.
+    studio.key("Escape")
+    cancelled = studio.shot("3c-cancelled", settle=1.0,
+                            until=lambda s: differing(start, s) == 0)
+    n = differing(start, cancelled)
+    expect(n == 0, f"after Escape the view differs from before the sketch in {n} pixels")
+    # The sketch again, without the cut.
+    add(studio, "Sketch bend", "3d")
+    time.sleep(1.0)
+    studio.drag(reference, steps=6)
+    time.sleep(3.0)
     # The target stroke: the same upper arm, the forearm turned up and out at the elbow.
     target = [(694, 240), (705, 258), (716, 276), (743, 272), (771, 268)]
     studio.drag(target, steps=6)
@@ -448,6 +467,11 @@ def story_sketch(studio):
     moved = sum(1 for _, _, c in pixels(bent, (745, 245, 800, 275)) if is_mesh(c))
     expect(moved > 300, "the target stroke did not bend the forearm where it was drawn")
     undo_check(studio, start, "4-arm-bent", "of the sketch")
+
+
+def rigid_pixels(shot):
+    """Pixels of a sketch's rigid parts: their orange, lit (red high, blue well below)."""
+    return sum(1 for _, _, (r, g, b) in pixels(shot) if r > 230 and g > 140 and r - b > 80)
 
 
 def bend_arm(studio):
