@@ -449,6 +449,8 @@ impl Influence {
         if self.volumes.is_empty() {
             // `g(v) = 1` everywhere: the mask is the area (or every vertex), weight 1.
             let indices: Vec<u32> = match area {
+                // Every index in range (the usual case): a plain copy.
+                Some(area) if area.iter().max().is_none_or(|&i| (i as usize) < n) => area.to_vec(),
                 Some(area) => area.iter().copied().filter(|&i| (i as usize) < n).collect(),
                 None => (0..n as u32).collect(),
             };
@@ -737,6 +739,21 @@ mod tests {
         );
         assert!(matches!(e, Err(CoreError::Degenerate { .. })));
         assert!(Shape::Sphere { radius: -1.0 }.validate("s").is_err());
+    }
+
+    #[test]
+    fn an_area_without_volumes_is_its_vertices_in_range_at_weight_one() {
+        let positions = vec![Vec3::ZERO; 10];
+        let inf = |area: Vec<u32>| Influence {
+            area: Some(area),
+            ..Influence::default()
+        };
+        let m = inf(vec![1, 4, 9]).mask(&positions);
+        assert_eq!((m.indices, m.weights), (vec![1, 4, 9], vec![1.0; 3]));
+        // Indices past the mesh (an area of a re-imported, smaller mesh) are left out.
+        let m = inf(vec![1, 12, 4, 10, 9]).mask(&positions);
+        assert_eq!((m.indices, m.weights), (vec![1, 4, 9], vec![1.0; 3]));
+        assert!(inf(vec![]).mask(&positions).is_empty());
     }
 
     #[test]
