@@ -315,28 +315,11 @@ fn gather(
     start: u32,
 ) -> Mask {
     let mut mask = Mask::default();
-    let Some((old, stale)) = reuse else {
-        for i in ids {
-            let w = weight(positions[i as usize]);
-            if w > 0.0 {
-                mask.indices.push(i);
-                mask.weights.push(w);
-            }
-        }
-        return mask;
-    };
-    let mut j = old.indices.partition_point(|&x| x < start);
+    let mut earlier = reuse.map(|(old, stale)| Earlier::new(old, stale, start));
     for i in ids {
-        let w = if stale.get(i as usize).copied().unwrap_or(true) {
-            weight(positions[i as usize])
-        } else {
-            while old.indices.get(j).is_some_and(|&x| x < i) {
-                j += 1;
-            }
-            match old.indices.get(j) {
-                Some(&x) if x == i => old.weights[j],
-                _ => 0.0,
-            }
+        let w = match &mut earlier {
+            Some(e) if !e.is_stale(i) => e.weight(i),
+            _ => weight(positions[i as usize]),
         };
         if w > 0.0 {
             mask.indices.push(i);
@@ -344,6 +327,46 @@ fn gather(
         }
     }
     mask
+}
+
+/// The weights an earlier mask gave, looked up for ascending vertices (what a mask made from
+/// an earlier one copies, [`Influence::mask_reusing`]).
+pub(crate) struct Earlier<'a> {
+    old: &'a Mask,
+    stale: &'a [bool],
+    /// The first entry of `old` not below the vertices looked up so far.
+    next: usize,
+}
+
+impl<'a> Earlier<'a> {
+    /// Lookups of `old` for the vertices from `start` on, with `stale` the vertices that
+    /// moved since (a vertex past its end counts as stale).
+    pub(crate) fn new(old: &'a Mask, stale: &'a [bool], start: u32) -> Self {
+        Self {
+            next: old.indices.partition_point(|&x| x < start),
+            old,
+            stale,
+        }
+    }
+
+    /// Whether vertex `i` moved, so that its weight must be computed again.
+    #[inline(always)]
+    pub(crate) fn is_stale(&self, i: u32) -> bool {
+        self.stale.get(i as usize).copied().unwrap_or(true)
+    }
+
+    /// `old`'s weight of `i` (0 when `i` is not in it); `i` at least every earlier one.
+    #[inline(always)]
+    pub(crate) fn weight(&mut self, i: u32) -> f32 {
+        let indices = &self.old.indices;
+        while indices.get(self.next).is_some_and(|&x| x < i) {
+            self.next += 1;
+        }
+        match indices.get(self.next) {
+            Some(&x) if x == i => self.old.weights[self.next],
+            _ => 0.0,
+        }
+    }
 }
 
 /// A layer's influence, resolved to mesh space and welded vertex indices.
@@ -457,6 +480,13 @@ impl Influence {
             let weights = vec![1.0; indices.len()];
             return Mask { indices, weights };
         }
+        // Sixteen vertices at a time where the falloff has a lane form (the same bits; a
+        // custom spline falloff goes vertex by vertex).
+        let lanes = LaneInfluence::new(self)
+            .filter(|_| area.is_none_or(|a| a.iter().all(|&i| (i as usize) < n)));
+        if let Some(lanes) = &lanes {
+            return gather_lanes(lanes, area, n, positions, reuse);
+        }
         // Outside every volume's (padded) box the volume weight `g` is exactly 0, so such a
         // vertex is decided by a box test alone: weight 0, or 1 when inverted (`1 − 0`), the
         // very bits `volume_weight` gives it.
@@ -473,13 +503,6 @@ impl Influence {
             }
         };
         let candidates = area.map_or(n, <[u32]>::len);
-        // Sixteen vertices at a time where the falloff has a lane form (the same bits; a
-        // custom spline falloff goes vertex by vertex).
-        let lanes = LaneInfluence::new(self, &boxes)
-            .filter(|_| area.is_none_or(|a| a.iter().all(|&i| (i as usize) < n)));
-        if let Some(lanes) = &lanes {
-            return gather_lanes(lanes, area, n, positions, reuse);
-        }
         if candidates < PARALLEL_THRESHOLD {
             return match area {
                 Some(area) => gather(
@@ -925,19 +948,9 @@ mod tests {
                             inner: 0.3,
                             invert,
                         };
-                        let m = inf.mask(&positions);
-                        let expected: Vec<(u32, u32)> = (0..positions.len() as u32)
-                            .map(|i| (i, inf.volume_weight(positions[i as usize])))
-                            .filter(|&(_, w)| w > 0.0)
-                            .map(|(i, w)| (i, w.to_bits()))
-                            .collect();
+                        let expected = weighed_bits(&inf, &positions);
                         assert!(!expected.is_empty() && expected.len() < positions.len());
-                        let got: Vec<(u32, u32)> = m
-                            .indices
-                            .iter()
-                            .zip(&m.weights)
-                            .map(|(&i, w)| (i, w.to_bits()))
-                            .collect();
+                        let got = mask_bits(&inf.mask(&positions));
                         assert_eq!(got, expected, "{shape:?} {falloff:?} invert {invert}");
                     }
                 }
@@ -945,12 +958,28 @@ mod tests {
         }
     }
 
-    /// The vertices a mask of `inf` over `n` vertices weighs: its area, or every vertex.
-    fn candidates_of(inf: &Influence, n: usize) -> Vec<u32> {
-        match &inf.area {
+    /// A mask's vertices with the bits of their weights.
+    fn mask_bits(m: &Mask) -> Vec<(u32, u32)> {
+        m.indices
+            .iter()
+            .zip(&m.weights)
+            .map(|(&i, w)| (i, w.to_bits()))
+            .collect()
+    }
+
+    /// What [`mask_bits`] of `inf`'s mask on `positions` must be: its area's vertices (or
+    /// every vertex; the area in range) of positive `volume_weight`, weighed one by one.
+    fn weighed_bits(inf: &Influence, positions: &[Vec3]) -> Vec<(u32, u32)> {
+        let candidates: Vec<u32> = match &inf.area {
             Some(a) => a.clone(),
-            None => (0..n as u32).collect(),
-        }
+            None => (0..positions.len() as u32).collect(),
+        };
+        candidates
+            .into_iter()
+            .map(|i| (i, inf.volume_weight(positions[i as usize])))
+            .filter(|&(_, w)| w > 0.0)
+            .map(|(i, w)| (i, w.to_bits()))
+            .collect()
     }
 
     proptest::proptest! {
@@ -1015,19 +1044,7 @@ mod tests {
                 invert,
             };
             let m = inf.mask(&positions);
-            let expected: Vec<(u32, u32)> = candidates_of(&inf, n)
-                .into_iter()
-                .map(|i| (i, inf.volume_weight(positions[i as usize])))
-                .filter(|&(_, w)| w > 0.0)
-                .map(|(i, w)| (i, w.to_bits()))
-                .collect();
-            let got: Vec<(u32, u32)> = m
-                .indices
-                .iter()
-                .zip(&m.weights)
-                .map(|(&i, w)| (i, w.to_bits()))
-                .collect();
-            proptest::prop_assert_eq!(got, expected);
+            proptest::prop_assert_eq!(mask_bits(&m), weighed_bits(&inf, &positions));
             // Made from this mask after a few runs of vertices moved (some lane groups
             // without a stale vertex, some partly stale), it is the fresh mask there.
             let stale: Vec<bool> = (0..n).map(|v| (v / 5) % 7 == 3 || v % 31 == 0).collect();
@@ -1038,19 +1055,7 @@ mod tests {
                 .collect();
             let area = inf.area.as_deref();
             let reused = inf.mask_reusing(area, &after, &m, &stale);
-            let expected: Vec<(u32, u32)> = candidates_of(&inf, n)
-                .into_iter()
-                .map(|i| (i, inf.volume_weight(after[i as usize])))
-                .filter(|&(_, w)| w > 0.0)
-                .map(|(i, w)| (i, w.to_bits()))
-                .collect();
-            let got: Vec<(u32, u32)> = reused
-                .indices
-                .iter()
-                .zip(&reused.weights)
-                .map(|(&i, w)| (i, w.to_bits()))
-                .collect();
-            proptest::prop_assert_eq!(got, expected);
+            proptest::prop_assert_eq!(mask_bits(&reused), weighed_bits(&inf, &after));
         }
     }
 }

@@ -334,6 +334,9 @@ const NAN: Lane = Lane([f32::from_bits(0x7FC0_0101); LANES]);
 const INFINITY: Lane = Lane::splat(f32::INFINITY);
 
 impl Mask {
+    /// No lane set.
+    pub(crate) const NONE: Self = Self([0; LANES]);
+
     /// `a` where set, `b` elsewhere (a bitwise blend, as `wide`'s `select`).
     #[inline(always)]
     #[must_use]

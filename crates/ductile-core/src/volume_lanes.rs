@@ -13,8 +13,8 @@
 
 use glam::Vec3;
 
-use crate::influence::{Falloff, Influence, Mask, Shape};
-use crate::lane::{LANES, Lane, Lanes3};
+use crate::influence::{Earlier, Falloff, Influence, Mask, Shape};
+use crate::lane::{LANES, Lane, Lanes3, Mask as LaneMask};
 
 /// The vertices a kernel weighs.
 #[derive(Clone, Copy)]
@@ -75,23 +75,23 @@ pub(crate) struct LaneInfluence {
 }
 
 impl LaneInfluence {
-    /// The lane form of `influence`'s volumes (with `boxes`, their cull boxes, in order), or
-    /// `None` when it has no volume or one of its volumes or its falloff has no lane form.
-    pub(crate) fn new(influence: &Influence, boxes: &[(Vec3, Vec3)]) -> Option<Self> {
+    /// The lane form of `influence`'s volumes (with their cull boxes), or `None` when it has
+    /// no volume or its falloff has no lane form.
+    pub(crate) fn new(influence: &Influence) -> Option<Self> {
         let falloff = match influence.falloff {
             Falloff::None => LaneFalloff::None,
             Falloff::Linear => LaneFalloff::Linear,
             Falloff::Smooth => LaneFalloff::Smooth,
             Falloff::Curve(_) => return None,
         };
-        if influence.volumes.is_empty() || influence.volumes.len() != boxes.len() {
+        if influence.volumes.is_empty() {
             return None;
         }
         let volumes = influence
             .volumes
             .iter()
-            .zip(boxes)
-            .map(|(v, &(lo, hi))| {
+            .map(|v| {
+                let (lo, hi) = v.cull_box();
                 let shape = match &v.shape {
                     &Shape::Sphere { radius } => LaneShape::Sphere { radius },
                     &Shape::Box { half_extents } => LaneShape::Box { half: half_extents },
@@ -163,7 +163,7 @@ impl LaneInfluence {
     #[inline(always)]
     fn weights(&self, v: &Lanes3) -> Lane {
         let outside = Lane::splat(if self.invert { 1.0 } else { 0.0 });
-        let mut inside = Lane::ZERO.simd_gt(Lane::ZERO);
+        let mut inside = LaneMask::NONE;
         for vol in &self.volumes {
             inside = inside
                 | (v.x.simd_ge(Lane::splat(vol.lo.x))
@@ -282,34 +282,6 @@ struct Gather<'a> {
     reuse: Option<(&'a Mask, &'a [bool])>,
 }
 
-/// The weights an earlier mask gave, looked up for ascending vertices.
-struct Earlier<'a> {
-    old: &'a Mask,
-    stale: &'a [bool],
-    /// The first entry of `old` not below the vertices looked up so far.
-    next: usize,
-}
-
-impl Earlier<'_> {
-    #[inline(always)]
-    fn is_stale(&self, i: u32) -> bool {
-        self.stale.get(i as usize).copied().unwrap_or(true)
-    }
-
-    /// `old`'s weight of `i` (0 when `i` is not in it); `i` at least every earlier one.
-    #[inline(always)]
-    fn weight(&mut self, i: u32) -> f32 {
-        let indices = &self.old.indices;
-        while indices.get(self.next).is_some_and(|&x| x < i) {
-            self.next += 1;
-        }
-        match indices.get(self.next) {
-            Some(&x) if x == i => self.old.weights[self.next],
-            _ => 0.0,
-        }
-    }
-}
-
 /// Where a lane group's positions come from.
 #[derive(Clone, Copy)]
 enum Source<'a> {
@@ -370,11 +342,9 @@ impl pulp::WithSimd for Gather<'_> {
             Ids::Range(start, _) => start,
             Ids::List(ids) => ids.first().copied().unwrap_or(0),
         };
-        let mut earlier = self.reuse.map(|(old, stale)| Earlier {
-            next: old.indices.partition_point(|&x| x < start),
-            old,
-            stale,
-        });
+        let mut earlier = self
+            .reuse
+            .map(|(old, stale)| Earlier::new(old, stale, start));
         let influence = self.influence;
         match self.ids {
             Ids::Range(start, end) => {

@@ -59,7 +59,7 @@ pub struct UiInputs<'w, 's> {
     notices: ResMut<'w, Notices>,
     box_select: Res<'w, crate::box_select::BoxSelect>,
     export: Res<'w, crate::files::ExportJob>,
-    evaluations: Query<'w, 's, &'static MeshEvaluation>,
+    /// Every mesh node's evaluation.
     meshes: Query<'w, 's, (&'static SceneNode, &'static MeshEvaluation)>,
 }
 
@@ -433,7 +433,7 @@ fn status_info(inputs: &UiInputs, frame_ms: Option<f64>) -> StatusInfo {
     let mut vertices = 0;
     let mut triangles = 0;
     let mut evaluating = false;
-    for ev in &inputs.evaluations {
+    for (_, ev) in &inputs.meshes {
         let mesh = ev.rest().mesh();
         match ev.evaluator().and_then(|e| e.deformed()) {
             Some(d) => {

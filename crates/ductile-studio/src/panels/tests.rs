@@ -356,14 +356,21 @@ fn the_inspector_edits_a_tool_and_refuses_an_out_of_range_value() {
     assert!(h.state().ops().is_empty(), "{:?}", h.state().ops());
 }
 
-#[test]
-fn the_history_panel_steps_and_jumps() {
+/// The history panel over a history of one layer-weight step per value of `weights`
+/// (labelled "weight W"), back at the opened state.
+fn history_of_weights(weights: &[f32]) -> State<HistoryPanel> {
     let mut state = State::new(HistoryPanel::default());
-    for w in [0.2_f32, 0.4] {
+    for &w in weights {
         let op = Operation::set_layer_weight(state.doc.document(), "m", 0, w).unwrap();
         state.doc.apply(op, format!("weight {w}"), None).unwrap();
     }
     state.doc.jump(0).unwrap();
+    state
+}
+
+#[test]
+fn the_history_panel_steps_and_jumps() {
+    let state = history_of_weights(&[0.2, 0.4]);
     let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
     h.run();
     h.get_by_label("⏭").click();
@@ -377,12 +384,7 @@ fn the_history_panel_steps_and_jumps() {
 
 #[test]
 fn the_history_panel_plays_at_its_speed_and_pauses() {
-    let mut state = State::new(HistoryPanel::default());
-    for w in [0.2_f32, 0.4, 0.6, 0.8] {
-        let op = Operation::set_layer_weight(state.doc.document(), "m", 0, w).unwrap();
-        state.doc.apply(op, format!("weight {w}"), None).unwrap();
-    }
-    state.doc.jump(0).unwrap();
+    let state = history_of_weights(&[0.2, 0.4, 0.6, 0.8]);
     let mut h = harness(state, |p, ui, cx| p.show(ui, cx));
     h.run();
     // At 2 steps per second (the default), a step every 0.5 s from the press of ▶. While it

@@ -474,11 +474,7 @@ fn dogme(
     let mut changed = false;
     ui.horizontal(|ui| {
         ui.label("degree");
-        let r = ui.add(egui::DragValue::new(&mut d.degree).speed(0.05));
-        if r.changed() {
-            changed = true;
-            *drag = Some(r);
-        }
+        changed |= dragged(ui, egui::DragValue::new(&mut d.degree).speed(0.05), drag);
     });
     let mut remove = None;
     for (i, c) in d.constraints.iter_mut().enumerate() {
