@@ -4,7 +4,8 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use ductile_core::axial::{AxialTool, AxisPoint, AxisShape};
-use ductile_core::curve::{CurveBasis, CurveTool};
+use ductile_core::curve::{CurveBasis, CurveEvaluator, CurveTool};
+use ductile_core::curve_pieces::CurvePieces;
 use ductile_core::mesh::Topology;
 use ductile_core::tool::{BindInput, Deformer};
 use glam::Vec3;
@@ -84,6 +85,20 @@ fn bench(c: &mut Criterion) {
         deformed,
     };
     tool.validate("bench").unwrap();
+    // The closest-point search alone, point by point and a lane group at a time.
+    let evaluator = CurveEvaluator::new(tool.basis, tool.rest.len(), "bench").unwrap();
+    let pieces = CurvePieces::new(&evaluator, &tool.rest);
+    c.bench_function("curve_bspline3_closest_scalar_100k", |b| {
+        b.iter(|| {
+            for x in &pts {
+                black_box(pieces.closest(black_box(*x)));
+            }
+        })
+    });
+    let mut found = vec![pieces.closest(Vec3::ZERO); pts.len()];
+    c.bench_function("curve_bspline3_closest_lanes_100k", |b| {
+        b.iter(|| pieces.closest_each(black_box(&pts), &mut found))
+    });
     c.bench_function("curve_bspline3_bind_100k", |b| {
         b.iter(|| black_box(tool.bind(black_box(&input)).unwrap()))
     });

@@ -318,40 +318,49 @@ impl AxialTool {
                 problem: "fewer than 2 samples".to_owned(),
             })?;
         let inv_r = 1.0 / self.radius;
-        // Every vertex on its own, in parallel chunks (the same bits as one by one).
+        // Every vertex on its own, in parallel chunks (the same bits as one by one): the
+        // closest axis points of a chunk's vertices that are not reused, a lane group at a
+        // time.
         let rest = &bind.rest;
         bind.segment
-            .par_iter_mut()
-            .zip(bind.fraction.par_iter_mut())
-            .zip(bind.local.par_iter_mut())
-            .zip(bind.base.par_iter_mut())
-            .zip(bind.weight.par_iter_mut())
-            .zip(active.par_iter())
-            .with_min_len(BIND_CHUNK)
-            .for_each(|(((((segment, fraction), local), base), weight), &i)| {
-                if let Some((old, s)) = previous.and_then(|p| p.entry(i)) {
-                    *segment = old.segment[s];
-                    *fraction = old.fraction[s];
-                    *local = old.local[s];
-                    *base = old.base[s];
-                    *weight = old.weight[s];
-                    return;
+            .par_chunks_mut(BIND_CHUNK)
+            .zip(bind.fraction.par_chunks_mut(BIND_CHUNK))
+            .zip(bind.local.par_chunks_mut(BIND_CHUNK))
+            .zip(bind.base.par_chunks_mut(BIND_CHUNK))
+            .zip(bind.weight.par_chunks_mut(BIND_CHUNK))
+            .zip(active.par_chunks(BIND_CHUNK))
+            .for_each(|(((((segment, fraction), local), base), weight), ids)| {
+                let mut fresh = Vec::with_capacity(ids.len());
+                let mut xs = Vec::with_capacity(ids.len());
+                for (j, &i) in ids.iter().enumerate() {
+                    if let Some((old, s)) = previous.and_then(|p| p.entry(i)) {
+                        segment[j] = old.segment[s];
+                        fraction[j] = old.fraction[s];
+                        local[j] = old.local[s];
+                        base[j] = old.base[s];
+                        weight[j] = old.weight[s];
+                    } else {
+                        fresh.push(j);
+                        xs.push(input.positions[i as usize]);
+                    }
                 }
-                let u = input.positions[i as usize];
-                let (j, f, d2) = index.closest(u);
-                let w = self.falloff.weight(d2.sqrt() * inv_r, self.inner);
-                if w <= 0.0 {
-                    return;
+                let mut found = vec![(0, 0.0, 0.0); xs.len()];
+                index.closest_each(&xs, &mut found);
+                for ((&v, u), (j, f, d2)) in fresh.iter().zip(xs).zip(found) {
+                    let w = self.falloff.weight(d2.sqrt() * inv_r, self.inner);
+                    if w <= 0.0 {
+                        continue;
+                    }
+                    let (a, m, rw, s) = rest.at_with_parts(j, f);
+                    // M = R W S is a rotation times diag(1, s, s) with s > 0: M⁻¹ = S⁻¹ (R W)ᵀ.
+                    let l = rw.transpose() * (u - a);
+                    let l = Vec3::new(l.x, l.y / s, l.z / s);
+                    segment[v] = j as u32;
+                    fraction[v] = f;
+                    local[v] = l;
+                    base[v] = a + m * l;
+                    weight[v] = w;
                 }
-                let (a, m, rw, s) = rest.at_with_parts(j, f);
-                // M = R W S is a rotation times diag(1, s, s) with s > 0: M⁻¹ = S⁻¹ (R W)ᵀ.
-                let l = rw.transpose() * (u - a);
-                let l = Vec3::new(l.x, l.y / s, l.z / s);
-                *segment = j as u32;
-                *fraction = f;
-                *local = l;
-                *base = a + m * l;
-                *weight = w;
             });
         Ok(bind)
     }

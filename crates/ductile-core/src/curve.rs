@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all, bernstein_all_with_derivative};
 use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots};
-use crate::curve_pieces::CurvePieces;
+use crate::curve_pieces::{Closest, CurvePieces};
 use crate::error::{CoreError, Result, check_finite_vec3};
 use crate::frames::PolylineIndex;
 use crate::tool::{BindInput, Deformer};
@@ -376,28 +376,37 @@ impl CurveTool {
         let mut firsts = vec![0; m];
         let mut weights = vec![0.0; m * stride];
         let previous = previous.filter(|p| p.bind.evaluator.degree() == evaluator.degree());
-        // Every vertex on its own, in parallel chunks (the same bits as one by one).
+        // Every vertex on its own, in parallel chunks (the same bits as one by one): the
+        // closest points of a chunk's vertices that are not reused, a lane group at a time.
         params
-            .par_iter_mut()
-            .zip(offsets.par_iter_mut())
-            .zip(firsts.par_iter_mut())
-            .zip(weights.par_chunks_mut(stride))
-            .zip(active.par_iter())
-            .with_min_len(BIND_CHUNK)
-            .for_each(|((((param, offset), first), weights), &i)| {
-                if let Some((old, s)) = previous.and_then(|p| p.entry(i)) {
-                    *param = old.params[s];
-                    *offset = old.offsets[s];
-                    *first = old.firsts[s];
-                    weights.copy_from_slice(&old.weights[s * stride..(s + 1) * stride]);
-                    return;
+            .par_chunks_mut(BIND_CHUNK)
+            .zip(offsets.par_chunks_mut(BIND_CHUNK))
+            .zip(firsts.par_chunks_mut(BIND_CHUNK))
+            .zip(weights.par_chunks_mut(BIND_CHUNK * stride))
+            .zip(active.par_chunks(BIND_CHUNK))
+            .for_each(|((((params, offsets), firsts), weights), ids)| {
+                let mut fresh = Vec::with_capacity(ids.len());
+                let mut xs = Vec::with_capacity(ids.len());
+                for (j, &i) in ids.iter().enumerate() {
+                    if let Some((old, s)) = previous.and_then(|p| p.entry(i)) {
+                        params[j] = old.params[s];
+                        offsets[j] = old.offsets[s];
+                        firsts[j] = old.firsts[s];
+                        weights[j * stride..(j + 1) * stride]
+                            .copy_from_slice(&old.weights[s * stride..(s + 1) * stride]);
+                    } else {
+                        fresh.push(j);
+                        xs.push(input.positions[i as usize]);
+                    }
                 }
-                let x = input.positions[i as usize];
-                let (c, _) = pieces.closest(x);
-                *param = c.t;
-                *offset = x - c.point;
-                *first = pieces.first(c.piece) as u32;
-                pieces.weights(c.piece, c.u, weights);
+                let mut found = vec![(Closest::default(), 0.0); xs.len()];
+                pieces.closest_each(&xs, &mut found);
+                for ((&j, x), (c, _)) in fresh.iter().zip(xs).zip(found) {
+                    params[j] = c.t;
+                    offsets[j] = x - c.point;
+                    firsts[j] = pieces.first(c.piece) as u32;
+                    pieces.weights(c.piece, c.u, &mut weights[j * stride..(j + 1) * stride]);
+                }
             });
         Ok(CurveBind {
             evaluator,

@@ -178,19 +178,19 @@ fn project_on_segment(p: Vec3, d: Vec3, l2: f32, x: Vec3) -> (f32, f32) {
 }
 
 /// Segments per block of a [`PolylineIndex`].
-const BLOCK: usize = 8;
+pub(crate) const BLOCK: usize = 8;
 
 /// Blocks whose bounds a query computes at a time on the stack.
-const BOUND_BATCH: usize = 64;
+pub(crate) const BOUND_BATCH: usize = 64;
 
 /// The segments of one block as structure of arrays, one lane per segment: start points,
 /// directions `p[s+1] − p[s]` and their squared lengths (lanes past the polyline's end
 /// repeat its last segment and are never chosen).
 #[derive(Debug, Clone, PartialEq)]
-struct BlockLanes {
-    p: [[f32; BLOCK]; 3],
-    d: [[f32; BLOCK]; 3],
-    l2: [f32; BLOCK],
+pub(crate) struct BlockLanes {
+    pub(crate) p: [[f32; BLOCK]; 3],
+    pub(crate) d: [[f32; BLOCK]; 3],
+    pub(crate) l2: [f32; BLOCK],
 }
 
 /// A polyline with bounding boxes over blocks of consecutive segments, for fast repeated
@@ -205,12 +205,12 @@ struct BlockLanes {
 pub struct PolylineIndex {
     points: Vec<Vec3>,
     /// Number of segments.
-    segments: usize,
+    pub(crate) segments: usize,
     /// The segments, [`BLOCK`] per block.
-    lanes: Vec<BlockLanes>,
+    pub(crate) lanes: Vec<BlockLanes>,
     /// The corners of each block's box, padded so that a segment point as rounded
     /// (`p + d·f`) never lies outside: `lo.x, lo.y, lo.z, hi.x, hi.y, hi.z` per block.
-    boxes: [Vec<f32>; 6],
+    pub(crate) boxes: [Vec<f32>; 6],
 }
 
 impl PolylineIndex {

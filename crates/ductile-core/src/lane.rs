@@ -128,6 +128,20 @@ impl Lane {
         self.simd_gt(o).select(self, o)
     }
 
+    /// The least integer not below each lane, as `f32::ceil`.
+    #[inline(always)]
+    #[must_use]
+    pub(crate) fn ceil(self) -> Self {
+        Self(each!(|i| self.0[i].ceil()))
+    }
+
+    /// The greatest integer not above each lane, as `f32::floor`.
+    #[inline(always)]
+    #[must_use]
+    pub(crate) fn floor(self) -> Self {
+        Self(each!(|i| self.0[i].floor()))
+    }
+
     /// `√x`, exactly rounded.
     #[inline(always)]
     #[must_use]
@@ -151,8 +165,9 @@ impl Lane {
         Mask(each!(|i| full(self.0[i].is_nan())))
     }
 
+    /// Neither infinite nor NaN.
     #[inline(always)]
-    fn is_finite(self) -> Mask {
+    pub(crate) fn is_finite(self) -> Mask {
         Mask(each!(|i| {
             full((self.0[i].to_bits() << 1) & 0xFF00_0000 != 0xFF00_0000)
         }))
@@ -343,6 +358,13 @@ impl Mask {
     pub(crate) fn select(self, a: Lane, b: Lane) -> Lane {
         let (a, b) = (a.bits(), b.bits());
         Lane::from_bits(each!(|i| (self.0[i] & a[i]) | (!self.0[i] & b[i])))
+    }
+
+    /// Whether lane `j` is set.
+    #[inline(always)]
+    #[must_use]
+    pub(crate) fn lane(self, j: usize) -> bool {
+        self.0[j] != 0
     }
 
     /// Whether any lane is set.

@@ -1,0 +1,265 @@
+//! [`CurvePieces::closest`] for a lane group of points at a time: the closest-point search of
+//! the curve binds on `lane.rs`'s lanes, in [`pulp`]'s runtime dispatch.
+//!
+//! The seed is the boundary polyline's closest point (`polyline_lanes.rs`); the Gauss–Newton
+//! steps `u ← u − (C − x)·C' / |C'|²` then run in every lane at once, each lane on its own
+//! piece: the piece's coefficients are gathered lane by lane and Horner's rule runs on the
+//! lanes. A lane stops where the scalar search stops (a zero or non-finite tangent, a NaN
+//! step, a step that brings the point no closer) and keeps its answer while the others go
+//! on. The piece a step lands in is computed in `f32`, where piece indices are exact
+//! integers (fewer than `2²⁴` pieces), with the scalar code's `min`s and clamps. Every lane
+//! does the scalar operations in their order, so each answer has the bits of
+//! [`CurvePieces::closest`]; a lane whose seed is not finite is answered by it.
+
+use glam::Vec3;
+
+use crate::curve_pieces::{Closest, CurvePieces, REFINE_STEPS};
+use crate::lane::{LANES, Lane, Lanes3, Mask};
+
+impl CurvePieces {
+    /// [`CurvePieces::closest`] of every point of `xs`, written to `out` (as long as `xs`):
+    /// the same bits, a lane group at a time.
+    ///
+    /// # Panics
+    /// When `out` and `xs` differ in length.
+    pub fn closest_each(&self, xs: &[Vec3], out: &mut [(Closest, f32)]) {
+        assert_eq!(xs.len(), out.len(), "one answer per point");
+        pulp::Arch::new().dispatch(ClosestEach {
+            pieces: self,
+            xs,
+            out,
+        });
+    }
+
+    /// `(C(u), dC/du)` in each lane, on each lane's piece `k[j]` (Horner's rule, as
+    /// [`CurvePieces::point_and_tangent`]).
+    #[inline(always)]
+    fn point_and_tangent_lanes(&self, k: &[usize; LANES], u: Lane) -> (Lanes3, Lanes3) {
+        let p = self.degree;
+        let q = p.max(1);
+        let same = k.iter().all(|&kj| kj == k[0]);
+        let mut c = Lanes3::ZERO;
+        for i in (0..=p).rev() {
+            c = c.scale(u).add(gather(&self.curve, k, same, p + 1, i));
+        }
+        let mut d = Lanes3::ZERO;
+        for i in (0..q).rev() {
+            d = d.scale(u).add(gather(&self.tangent, k, same, q, i));
+        }
+        (c, d)
+    }
+
+    /// `(k, u)` with the end of an inner piece written as the start of the next one (the
+    /// lane form of `settled`).
+    #[inline(always)]
+    fn settled_lanes(&self, k: Lane, u: Lane) -> (Lane, Lane) {
+        let one = Lane::splat(1.0);
+        let next = k + one;
+        let m = u.simd_ge(one) & next.simd_lt(Lane::splat(self.count as f32));
+        (m.select(next, k), m.select(Lane::ZERO, u))
+    }
+
+    /// The closest points of a lane group whose seeds are finite (module documentation):
+    /// each lane's piece, local parameter, point and squared distance.
+    #[inline(always)]
+    fn closest_lanes(&self, x: &Lanes3, seg: Lane, frac: Lane) -> (Lane, Lane, Lanes3, Lane) {
+        let (zero, one) = (Lane::ZERO, Lane::splat(1.0));
+        let last = Lane::splat((self.count - 1) as f32);
+        let (mut k, mut u) = self.settled_lanes(seg, frac);
+        let (mut c, mut dc) = self.point_and_tangent_lanes(&indices(k, self.count), u);
+        let mut best = c.sub(*x).length_squared();
+        let mut going = !Mask::NONE;
+        for _ in 0..REFINE_STEPS {
+            let l2 = dc.length_squared();
+            going = going & l2.simd_gt(zero) & l2.is_finite();
+            if !going.any() {
+                break;
+            }
+            let next = u - dot(c.sub(*x), dc) / l2;
+            going = going & next.simd_eq(next);
+            // Back `min(⌈−next⌉, k)` pieces, or ahead `min(⌊next⌋, last − k)`; with none
+            // to go the clamp gives the scalar code's 0 or 1.
+            let back = (-next).ceil().min(k);
+            let ahead = next.floor().min(last - k);
+            let below = next.simd_lt(zero);
+            let above = next.simd_gt(one);
+            let kn = below.select(k - back, above.select(k + ahead, k));
+            let un = below.select(
+                clamp01(next + back),
+                above.select(clamp01(next - ahead), next),
+            );
+            let (kn, un) = self.settled_lanes(kn, un);
+            let (cn, dn) = self.point_and_tangent_lanes(&indices(kn, self.count), un);
+            let d = cn.sub(*x).length_squared();
+            going = going & d.simd_lt(best);
+            best = going.select(d, best);
+            k = going.select(kn, k);
+            u = going.select(un, u);
+            c = c.select(going, cn);
+            dc = dc.select(going, dn);
+        }
+        (k, u, c, best)
+    }
+}
+
+/// Each lane's piece index (`f32` integers), clamped into `0..count`.
+#[inline(always)]
+fn indices(k: Lane, count: usize) -> [usize; LANES] {
+    let k = k.as_array();
+    let mut out = [0; LANES];
+    for (o, &k) in out.iter_mut().zip(k) {
+        *o = (k as usize).min(count - 1);
+    }
+    out
+}
+
+/// Coefficient `i` of each lane's piece `k[j]` in a table of `stride` vectors per piece (one
+/// load when every lane is on the same piece, `same`, as the neighbouring vertices of a lane
+/// group often are).
+#[inline(always)]
+fn gather(table: &[Vec3], k: &[usize; LANES], same: bool, stride: usize, i: usize) -> Lanes3 {
+    if same {
+        return Lanes3::splat(table[k[0] * stride + i]);
+    }
+    let mut out = Lanes3::ZERO;
+    for (j, &k) in k.iter().enumerate() {
+        out.set(j, table[k * stride + i]);
+    }
+    out
+}
+
+/// `a·b` in glam's order: `(ax bx + ay by) + az bz`.
+#[inline(always)]
+fn dot(a: Lanes3, b: Lanes3) -> Lane {
+    a.x * b.x + a.y * b.y + a.z * b.z
+}
+
+/// `f32::clamp(0, 1)` in each lane (NaN kept).
+#[inline(always)]
+fn clamp01(q: Lane) -> Lane {
+    let (zero, one) = (Lane::ZERO, Lane::splat(1.0));
+    let q = q.simd_lt(zero).select(zero, q);
+    q.simd_gt(one).select(one, q)
+}
+
+/// [`CurvePieces::closest_each`]'s kernel.
+struct ClosestEach<'a> {
+    pieces: &'a CurvePieces,
+    xs: &'a [Vec3],
+    out: &'a mut [(Closest, f32)],
+}
+
+impl pulp::WithSimd for ClosestEach<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let pieces = self.pieces;
+        if !pieces.index.has_lanes() {
+            for (o, &x) in self.out.iter_mut().zip(self.xs) {
+                *o = pieces.closest(x);
+            }
+            return;
+        }
+        for (xs, out) in self.xs.chunks(LANES).zip(self.out.chunks_mut(LANES)) {
+            let x = Lanes3::load(xs);
+            let seeds = pieces.index.closest_lanes(&x);
+            let finite = seeds.d2.is_finite();
+            let (k, u, c, d2) = pieces.closest_lanes(&x, seeds.segment, seeds.fraction);
+            for (j, o) in out.iter_mut().enumerate() {
+                if !finite.lane(j) {
+                    *o = pieces.closest(xs[j]);
+                    continue;
+                }
+                let (piece, u) = (k.as_array()[j] as usize, u.as_array()[j]);
+                let t = ((piece as f64 + f64::from(u)) / pieces.count as f64) as f32;
+                let point = c.lane(j);
+                *o = (Closest { piece, u, t, point }, d2.as_array()[j]);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::curve::{CurveBasis, CurveEvaluator};
+    use proptest::prelude::*;
+
+    fn bits(a: &(Closest, f32)) -> (usize, u32, u32, [u32; 3], u32) {
+        let (c, d) = a;
+        (
+            c.piece,
+            c.u.to_bits(),
+            c.t.to_bits(),
+            c.point.to_array().map(f32::to_bits),
+            d.to_bits(),
+        )
+    }
+
+    fn check(basis: CurveBasis, ctrl: &[Vec3], xs: &[Vec3]) -> Result<(), TestCaseError> {
+        let evaluator = CurveEvaluator::new(basis, ctrl.len(), "test").unwrap();
+        let pieces = CurvePieces::new(&evaluator, ctrl);
+        let mut out = vec![(pieces.closest(Vec3::ZERO).0, 0.0); xs.len()];
+        pieces.closest_each(xs, &mut out);
+        for (x, o) in xs.iter().zip(&out) {
+            prop_assert_eq!(bits(o), bits(&pieces.closest(*x)), "x = {}", x);
+        }
+        Ok(())
+    }
+
+    fn bases() -> Vec<CurveBasis> {
+        vec![
+            CurveBasis::Bezier,
+            CurveBasis::BSpline { degree: 1 },
+            CurveBasis::BSpline { degree: 2 },
+            CurveBasis::BSpline { degree: 3 },
+        ]
+    }
+
+    #[test]
+    fn lanes_give_the_scalar_bits_near_and_far_from_wiggly_curves() {
+        let ctrl: Vec<Vec3> = (0..9)
+            .map(|i| {
+                let s = i as f32;
+                Vec3::new(s, (s * 1.7).sin() * 2.0, (s * 0.6).cos())
+            })
+            .collect();
+        let xs: Vec<Vec3> = (0..3001)
+            .map(|i| {
+                let s = i as f32 * 0.003;
+                Vec3::new(
+                    s * 3.0 - 0.5,
+                    (i as f32 * 0.71).cos() * 3.0,
+                    (i as f32 * 0.13).sin() * 2.0,
+                )
+            })
+            .chain([Vec3::splat(f32::NAN), Vec3::new(-1e30, 0.0, 0.0), ctrl[4]])
+            .collect();
+        for basis in bases() {
+            check(basis, &ctrl, &xs).unwrap();
+        }
+        // A curve folded onto itself (repeated control points): zero tangents.
+        let folded = [Vec3::ZERO, Vec3::X, Vec3::X, Vec3::X, Vec3::ZERO];
+        for basis in bases() {
+            check(basis, &folded, &xs).unwrap();
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn lanes_match_the_scalar_search(
+            pts in prop::collection::vec(prop::array::uniform3(-5.0f32..5.0), 2..9),
+            xs in prop::collection::vec(prop::array::uniform3(-8.0f32..8.0), 1..40),
+            which in 0usize..4,
+        ) {
+            let ctrl: Vec<Vec3> = pts.into_iter().map(Vec3::from).collect();
+            let xs: Vec<Vec3> = xs.into_iter().map(Vec3::from).collect();
+            let basis = match which {
+                0 => CurveBasis::Bezier,
+                d => CurveBasis::BSpline { degree: d.min(ctrl.len() - 1) },
+            };
+            check(basis, &ctrl, &xs)?;
+        }
+    }
+}
