@@ -19,7 +19,7 @@ use glam::{Affine3A, Mat3, Quat, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots};
+use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots, zeroed};
 use crate::curve::{CurveBasis, CurveEvaluator, validate_polygon};
 use crate::error::{CoreError, Result, check_finite};
 use crate::frames::{Frame, PolylineIndex, double_reflection, polyline_tangents};
@@ -307,8 +307,8 @@ impl AxialTool {
             slot,
             segment: vec![0; m],
             fraction: vec![0.0; m],
-            local: vec![Vec3::ZERO; m],
-            base: vec![Vec3::ZERO; m],
+            local: zeroed(m),
+            base: zeroed(m),
             weight: vec![0.0; m],
             rest,
         };

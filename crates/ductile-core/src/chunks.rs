@@ -21,12 +21,30 @@ pub const PARALLEL_COPY_THRESHOLD: usize = 1 << 17;
 /// shape surfaces).
 pub const BIND_CHUNK: usize = 4096;
 
+/// `n` zeros of a plain type from zeroed memory (`calloc`). Unlike `vec![v; n]` of a struct,
+/// which writes every element on the calling thread, nothing is written now: the pages are
+/// first touched, and zeroed by the system, by the threads that fill the vector in parallel
+/// chunks.
+#[must_use]
+pub fn zeroed<T: bytemuck::Zeroable>(n: usize) -> Vec<T> {
+    bytemuck::zeroed_vec(n)
+}
+
 /// The slots of a compact per-vertex bind of `n` vertices: `slot[v]` is the position of
 /// vertex `v` in the bind's active list (`u32::MAX` for a vertex that is not active), with
 /// that list (the vertices of `active` below `n`, each once, in order).
 #[must_use]
 pub fn bind_slots(n: usize, active: &[u32]) -> (Vec<u32>, Vec<u32>) {
-    let mut slot = vec![u32::MAX; n];
+    let mut slot = Vec::with_capacity(n);
+    if n >= PARALLEL_COPY_THRESHOLD {
+        (0..n)
+            .into_par_iter()
+            .with_min_len(CHUNK)
+            .map(|_| u32::MAX)
+            .collect_into_vec(&mut slot);
+    } else {
+        slot.resize(n, u32::MAX);
+    }
     // A mask's indices (strictly ascending, in range) are the list itself; their slots are
     // written in parallel chunks.
     if active.windows(2).all(|w| w[0] < w[1]) && active.last().is_none_or(|&i| (i as usize) < n) {

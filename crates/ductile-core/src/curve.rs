@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all, bernstein_all_with_derivative};
-use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots};
+use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots, zeroed};
 use crate::curve_pieces::{Closest, CurvePieces};
 use crate::error::{CoreError, Result, check_finite_vec3};
 use crate::frames::PolylineIndex;
@@ -372,7 +372,7 @@ impl CurveTool {
         let m = active.len();
         let stride = 2 * evaluator.degree() + 1;
         let mut params = vec![0.0; m];
-        let mut offsets = vec![Vec3::ZERO; m];
+        let mut offsets = zeroed(m);
         let mut firsts = vec![0; m];
         let mut weights = vec![0.0; m * stride];
         let previous = previous.filter(|p| p.bind.evaluator.degree() == evaluator.degree());

@@ -16,7 +16,7 @@ use std::sync::Arc;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::chunks::{CHUNK, PARALLEL_THRESHOLD, Reuse, for_each_at, gather_at, scatter_at};
+use crate::chunks::{CHUNK, PARALLEL_THRESHOLD, Reuse, for_each_at, gather_at, scatter_at, zeroed};
 use crate::error::{CoreError, Result, check_finite};
 use crate::influence::{Influence, Mask};
 use crate::mesh::{Deformed, RestMesh, Topology};
@@ -148,7 +148,7 @@ impl LayerBinding {
             });
         };
         let n = indices.len();
-        let (mut saved, mut written) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+        let (mut saved, mut written) = (zeroed(n), zeroed(n));
         let input: &[Vec3] = positions;
         let weights = &self.mask.weights;
         // One chunk starting at mask position `k0`; returns the position of its first
@@ -262,7 +262,7 @@ impl LayerBinding {
             return Ok(false);
         }
         let active: Vec<u32> = at.iter().map(|&k| self.mask.indices[k as usize]).collect();
-        let mut out = vec![Vec3::ZERO; active.len()];
+        let mut out = zeroed(active.len());
         deform_chunks(&layer.tool, bind, positions, &active, &mut out);
         if let Some(k) = first_non_finite(&out) {
             return Err(CoreError::Degenerate {
@@ -294,7 +294,7 @@ impl LayerBinding {
         let result = match layer.tool.deform_whole(bind, positions, refine) {
             Some(r) => r?,
             None => {
-                let mut out = vec![Vec3::ZERO; active.len()];
+                let mut out = zeroed(active.len());
                 deform_chunks(&layer.tool, bind, positions, active, &mut out);
                 WholeDeform {
                     out,

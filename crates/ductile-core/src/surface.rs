@@ -19,7 +19,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE};
-use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots};
+use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots, zeroed};
 use crate::curve_pieces::BasisPieces;
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
 use crate::tool::{BindInput, Deformer};
@@ -199,13 +199,44 @@ fn piece_bases(pieces: &[Option<BasisPieces>; 2], kv: &[KnotVector; 2], u: f32, 
         su: 0,
         sv: 0,
     };
-    let one = |k: usize, t: f32, values: &mut [f32], derivs: &mut [f32]| match &pieces[k] {
-        Some(p) => p.values_and_derivatives(t, values, derivs),
-        None => kv[k].basis_with_derivative(t, values, derivs) - kv[k].degree(),
-    };
-    b.su = one(0, u, &mut b.nu, &mut b.du);
-    b.sv = one(1, v, &mut b.nv, &mut b.dv);
+    b.su = basis_1d(pieces[0].as_ref(), &kv[0], u, &mut b.nu, &mut b.du);
+    b.sv = basis_1d(pieces[1].as_ref(), &kv[1], v, &mut b.nv, &mut b.dv);
     b
+}
+
+/// [`piece_bases`] written to `out` as a bind keeps them, `N_u`, `N_u'`, `N_v`, `N_v'`
+/// (`p_u + 1`, `p_u + 1`, `p_v + 1`, `p_v + 1` values); returns the first non-zero function in
+/// `u` and in `v`.
+fn piece_bases_into(
+    pieces: &[Option<BasisPieces>; 2],
+    kv: &[KnotVector; 2],
+    u: f32,
+    v: f32,
+    out: &mut [f32],
+) -> (usize, usize) {
+    let (pu, pv) = (kv[0].degree(), kv[1].degree());
+    let (nu, rest) = out.split_at_mut(pu + 1);
+    let (du, rest) = rest.split_at_mut(pu + 1);
+    let (nv, dv) = rest.split_at_mut(pv + 1);
+    (
+        basis_1d(pieces[0].as_ref(), &kv[0], u, nu, du),
+        basis_1d(pieces[1].as_ref(), &kv[1], v, nv, &mut dv[..=pv]),
+    )
+}
+
+/// The non-zero basis functions of one knot vector at `t` and their derivatives, from its
+/// power-form pieces or (without them) the recurrence; returns the first one's index.
+fn basis_1d(
+    pieces: Option<&BasisPieces>,
+    kv: &KnotVector,
+    t: f32,
+    values: &mut [f32],
+    derivs: &mut [f32],
+) -> usize {
+    match pieces {
+        Some(p) => p.values_and_derivatives(t, values, derivs),
+        None => kv.basis_with_derivative(t, values, derivs) - kv.degree(),
+    }
 }
 
 /// `(S, S_u, S_v)` of a control net at bases `b`.
@@ -271,7 +302,7 @@ fn eval_weights(net: &[Vec3], n_u: usize, b: Weights<'_>) -> [Vec3; 3] {
 }
 
 /// One bound point: its surface coordinates and what deform needs at them.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, bytemuck::Zeroable)]
 struct Bound {
     uv: (f32, f32),
     u3: f32,
@@ -419,22 +450,18 @@ impl ShapeSurfaceTool {
         let det = a * c - b * b;
         // The bases kept per bound point, in power-form pieces (no knot search or division).
         let pieces = [BasisPieces::new(&knots[0]), BasisPieces::new(&knots[1])];
-        let project = |x: Vec3| -> Option<(Bound, Bases)> {
-            let (u, v, s, bs) = if planar && det > 0.0 {
+        // The bound point of `x`, its basis values written to `weights`; `None` (and
+        // `weights` untouched) where it does not project.
+        let project = |x: Vec3, weights: &mut [f32]| -> Option<Bound> {
+            let (u, v, s) = if planar && det > 0.0 {
                 let r = x - o;
                 let (g1, g2) = (r.dot(eu), r.dot(ev));
                 let u = ((c * g1 - b * g2) / det).clamp(0.0, 1.0);
                 let v = ((a * g2 - b * g1) / det).clamp(0.0, 1.0);
                 // The point and the derivatives of the plane, without summing the net.
-                (
-                    u,
-                    v,
-                    [o + eu * u + ev * v, eu, ev],
-                    piece_bases(&pieces, &knots, u, v),
-                )
+                (u, v, [o + eu * u + ev * v, eu, ev])
             } else {
-                let (u, v, s) = closest_point(&knots, &rest, &samples, x);
-                (u, v, s, piece_bases(&pieces, &knots, u, v))
+                closest_point(&knots, &rest, &samples, x)
             };
             let n = s[1].cross(s[2]);
             if n.length_squared().is_nan() || n.length_squared() <= 0.0 {
@@ -447,32 +474,22 @@ impl ShapeSurfaceTool {
             if (r - n * u3).length() > 1e-4 * size {
                 return None;
             }
-            Some((
-                Bound {
-                    uv: (u, v),
-                    u3,
-                    normal: n,
-                    du: s[1],
-                    dv: s[2],
-                    span: (bs.su as u32, bs.sv as u32),
-                },
-                bs,
-            ))
+            let (su, sv) = piece_bases_into(&pieces, &knots, u, v, weights);
+            Some(Bound {
+                uv: (u, v),
+                u3,
+                normal: n,
+                du: s[1],
+                dv: s[2],
+                span: (su as u32, sv as u32),
+            })
         };
         // Every active vertex on its own, in parallel chunks, into its slot; a vertex that
         // does not project keeps an unused slot and is marked unbound after.
         let (mut slot, active) = bind_slots(input.positions.len(), input.active);
         let m = active.len();
         let stride = 2 * (pu + 1) + 2 * (pv + 1);
-        let unbound = Bound {
-            uv: (0.0, 0.0),
-            u3: 0.0,
-            normal: Vec3::ZERO,
-            du: Vec3::ZERO,
-            dv: Vec3::ZERO,
-            span: (0, 0),
-        };
-        let mut points = vec![unbound; m];
+        let mut points: Vec<Bound> = zeroed(m);
         let mut weights = vec![0.0; m * stride];
         let mut projects = vec![false; m];
         let previous = previous.filter(|p| p.bind.knots == knots);
@@ -491,15 +508,9 @@ impl ShapeSurfaceTool {
                     }
                     return;
                 }
-                if let Some((b, bs)) = project(input.positions[i as usize]) {
+                if let Some(b) = project(input.positions[i as usize], weights) {
                     *point = b;
                     *projects = true;
-                    let w = bs.weights(pu, pv);
-                    let mut at = 0;
-                    for part in [w.nu, w.du, w.nv, w.dv] {
-                        weights[at..at + part.len()].copy_from_slice(part);
-                        at += part.len();
-                    }
                 }
             });
         for (&i, _) in active.iter().zip(&projects).filter(|(_, p)| !**p) {
