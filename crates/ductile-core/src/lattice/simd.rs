@@ -352,8 +352,11 @@ impl<const L: usize, const C: usize> WithSimd for BSpline<'_, L, C> {
         let f = frame(simd, lat);
         let p = L - 1;
         let [nx, ny, _] = lat.counts;
-        // The broadcast control values of the cell in hand.
+        // The broadcast control values of the cell in hand (`loaded`): neighbouring
+        // vertices, hence consecutive blocks, are mostly in one cell, which is then
+        // broadcast once.
         let mut control: Vec<S::f32s> = vec![zero; L * L * L * COMPONENTS];
+        let mut loaded: Option<[usize; 3]> = None;
 
         for (idx, out) in self.active.chunks(lanes).zip(self.out.chunks_mut(lanes)) {
             let block = load(simd, &f, self.positions, idx);
@@ -405,17 +408,20 @@ impl<const L: usize, const C: usize> WithSimd for BSpline<'_, L, C> {
                     }
                     basis[a] = n;
                 }
-                let start = (span[0] - p) + nx * ((span[1] - p) + ny * (span[2] - p));
-                for k in 0..L {
-                    for j in 0..L {
-                        for i in 0..L {
-                            let d = lat.data[start + i + nx * (j + ny * k)];
-                            let base = (i + L * (j + L * k)) * COMPONENTS;
-                            for c in 0..C {
-                                control[base + c] = simd.splat_f32s(d[c]);
+                if loaded != Some(span) {
+                    let start = (span[0] - p) + nx * ((span[1] - p) + ny * (span[2] - p));
+                    for k in 0..L {
+                        for j in 0..L {
+                            for i in 0..L {
+                                let d = lat.data[start + i + nx * (j + ny * k)];
+                                let base = (i + L * (j + L * k)) * COMPONENTS;
+                                for c in 0..C {
+                                    control[base + c] = simd.splat_f32s(d[c]);
+                                }
                             }
                         }
                     }
+                    loaded = Some(span);
                 }
                 let q = tensor::<S, L, C>(simd, &control, &basis, &block, &f.origin);
                 for l in first..block.n {
