@@ -74,10 +74,9 @@ pub struct CurvePieces {
     pub(crate) curve: Vec<Vec3>,
     /// Per piece, `p` coefficients of `dC/du` (at least one, zero for a constant).
     pub(crate) tangent: Vec<Vec3>,
-    /// Per piece, the point basis: `p + 1` coefficients (`u⁰` first) × `p + 1` functions,
-    /// the functions' coefficients of one power side by side ([`horner_columns`]).
+    /// Per piece, `p + 1` functions × `p + 1` coefficients of the point basis.
     point_basis: Vec<f32>,
-    /// Per piece, the segment basis: `p` coefficients × `p` functions, laid out likewise.
+    /// Per piece, `p` functions × `p` coefficients of the segment basis.
     segment_basis: Vec<f32>,
     /// Per piece, the index of its first non-zero point and segment function.
     firsts: Vec<u32>,
@@ -161,11 +160,11 @@ impl CurvePieces {
                 let c = j as f64;
                 tangent.push(vec3([c * a[0], c * a[1], c * a[2]]));
             }
-            point_basis.extend(columns(&point));
+            point_basis.extend(point.iter().flatten().map(|&c| c as f32));
             // The segment basis: degree p − 1 over the n − 1 segments.
             if p >= 1 {
                 let seg = piece_functions(&seg_nodes, p, t0, h, basis(1, span));
-                segment_basis.extend(columns(&seg));
+                segment_basis.extend(seg.iter().flatten().map(|&c| c as f32));
             }
             firsts.push(first as u32);
         }
@@ -307,10 +306,14 @@ impl CurvePieces {
             return;
         }
         let pb = &self.point_basis[k * (p + 1) * (p + 1)..(k + 1) * (p + 1) * (p + 1)];
-        horner_columns(pb, u, &mut out[..=p]);
+        for (o, c) in out[..=p].iter_mut().zip(pb.chunks_exact(p + 1)) {
+            *o = horner(c, u);
+        }
         if p >= 1 {
             let sb = &self.segment_basis[k * p * p..(k + 1) * p * p];
-            horner_columns(sb, u, &mut out[p + 1..=2 * p]);
+            for (o, c) in out[p + 1..=2 * p].iter_mut().zip(sb.chunks_exact(p)) {
+                *o = horner(c, u);
+            }
         }
     }
 }
@@ -324,8 +327,7 @@ pub struct BasisPieces {
     degree: usize,
     /// Number of pieces `m`.
     count: usize,
-    /// Per piece, `p + 1` coefficients × `p + 1` functions, the functions' coefficients of
-    /// one power side by side ([`horner_columns`]).
+    /// Per piece, `p + 1` functions × `p + 1` coefficients.
     coeffs: Vec<f32>,
     /// Per piece, its first non-zero function.
     firsts: Vec<u32>,
@@ -362,7 +364,7 @@ impl BasisPieces {
             let span = k / per_span;
             let (t0, h) = (k as f64 / count as f64, 1.0 / count as f64);
             let functions = piece_functions(&nodes, p + 1, t0, h, basis(span));
-            coeffs.extend(columns(&functions));
+            coeffs.extend(functions.iter().flatten().map(|&c| c as f32));
             firsts.push(span as u32);
         }
         let mut end = [0.0_f64; 17];
@@ -397,9 +399,19 @@ impl BasisPieces {
         };
         let c = &self.coeffs[k * (p + 1) * (p + 1)..(k + 1) * (p + 1) * (p + 1)];
         let m = self.count as f32;
-        horner_columns_with_derivative(c, u, &mut values[..=p], &mut derivs[..=p]);
-        for d in &mut derivs[..=p] {
-            *d *= m;
+        for ((v, d), a) in values[..=p]
+            .iter_mut()
+            .zip(derivs[..=p].iter_mut())
+            .zip(c.chunks_exact(p + 1))
+        {
+            // Horner for the value and its derivative together.
+            let (mut y, mut dy) = (0.0_f32, 0.0_f32);
+            for &aj in a.iter().rev() {
+                dy = dy * u + y;
+                y = y * u + aj;
+            }
+            *v = y;
+            *d = dy * m;
         }
         if t >= 1.0 {
             values[..=p].copy_from_slice(&self.end);
@@ -408,83 +420,12 @@ impl BasisPieces {
     }
 }
 
-/// Functions' power-form coefficients (one row per function, `u⁰` first) as `f32`, in the
-/// layout of [`horner_columns`]: the coefficients of `u⁰` of every function, then of `u¹`, …
-fn columns(rows: &[Vec<f64>]) -> impl Iterator<Item = f32> + '_ {
-    let powers = rows.first().map_or(0, Vec::len);
-    (0..powers).flat_map(move |j| rows.iter().map(move |r| r[j] as f32))
-}
-
-/// `out[f] = Σⱼ c[j n + f] uʲ` for the `n = out.len()` functions whose coefficients `c`
-/// holds power by power ([`columns`]), each by Horner's rule: `acc ← acc·u + cⱼ` from the
-/// highest power, starting at 0. Separate products and sums, not `mul_add`: the baseline
+/// `Σⱼ cⱼ uʲ` by Horner's rule. Separate products and sums, not `mul_add`: the baseline
 /// x86-64 target has no fused multiply–add instruction, and `mul_add` becomes a call to a
-/// software `fmaf`. The functions are independent chains side by side, which the compiler
-/// turns into vector code for the common counts.
+/// software `fmaf`.
 #[inline]
-fn horner_columns(c: &[f32], u: f32, out: &mut [f32]) {
-    /// One count `N`, unrolled.
-    #[inline(always)]
-    fn fixed<const N: usize>(c: &[f32], u: f32, out: &mut [f32]) {
-        let mut acc = [0.0_f32; N];
-        for row in c.chunks_exact(N).rev() {
-            for (a, &cj) in acc.iter_mut().zip(row) {
-                *a = *a * u + cj;
-            }
-        }
-        out.copy_from_slice(&acc);
-    }
-    match out.len() {
-        1 => fixed::<1>(c, u, out),
-        2 => fixed::<2>(c, u, out),
-        3 => fixed::<3>(c, u, out),
-        4 => fixed::<4>(c, u, out),
-        5 => fixed::<5>(c, u, out),
-        6 => fixed::<6>(c, u, out),
-        n => {
-            out.fill(0.0);
-            for row in c.chunks_exact(n).rev() {
-                for (a, &cj) in out.iter_mut().zip(row) {
-                    *a = *a * u + cj;
-                }
-            }
-        }
-    }
-}
-
-/// [`horner_columns`] with each function's derivative `Σⱼ j c[j n + f] uʲ⁻¹` by the same
-/// pass (`dy ← dy·u + y` before `y ← y·u + cⱼ`), written to `derivs`.
-#[inline]
-fn horner_columns_with_derivative(c: &[f32], u: f32, values: &mut [f32], derivs: &mut [f32]) {
-    /// One count `N`, unrolled.
-    #[inline(always)]
-    fn fixed<const N: usize>(c: &[f32], u: f32, values: &mut [f32], derivs: &mut [f32]) {
-        let (mut y, mut dy) = ([0.0_f32; N], [0.0_f32; N]);
-        for row in c.chunks_exact(N).rev() {
-            for f in 0..N {
-                dy[f] = dy[f] * u + y[f];
-                y[f] = y[f] * u + row[f];
-            }
-        }
-        values.copy_from_slice(&y);
-        derivs.copy_from_slice(&dy);
-    }
-    match values.len() {
-        2 => fixed::<2>(c, u, values, derivs),
-        3 => fixed::<3>(c, u, values, derivs),
-        4 => fixed::<4>(c, u, values, derivs),
-        5 => fixed::<5>(c, u, values, derivs),
-        n => {
-            values.fill(0.0);
-            derivs.fill(0.0);
-            for row in c.chunks_exact(n).rev() {
-                for f in 0..n {
-                    derivs[f] = derivs[f] * u + values[f];
-                    values[f] = values[f] * u + row[f];
-                }
-            }
-        }
-    }
+fn horner(c: &[f32], u: f32) -> f32 {
+    c.iter().rev().fold(0.0, |acc, &a| acc * u + a)
 }
 
 /// `Σⱼ aⱼ uʲ` for vectors, by Horner's rule (separate products and sums, as [`horner`]).
