@@ -19,7 +19,8 @@ mod common;
 /// Normal dependencies `ductile-core` may have: math, serialisation, errors, parallelism, and
 /// the numeric/graph crates its solvers use (faer for linear algebra, petgraph for the
 /// sketch tool's minimum cut, wide for the FFSD kernel's SIMD lanes, pulp to pick the SIMD
-/// width of the Bernstein lattice kernel when the program runs).
+/// width of the Bernstein lattice kernel when the program runs), and bytemuck for zeroed
+/// allocations of plain vectors.
 const CORE_ALLOWED: &[&str] = &[
     "glam",
     "serde",
@@ -29,6 +30,7 @@ const CORE_ALLOWED: &[&str] = &[
     "petgraph",
     "wide",
     "pulp",
+    "bytemuck",
 ];
 /// Normal dependencies `ductile-anim` may have: core, math, serialisation, errors, and a
 /// portable seeded generator for random variants.
