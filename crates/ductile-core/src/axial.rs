@@ -330,20 +330,14 @@ impl AxialTool {
             .zip(bind.weight.par_chunks_mut(BIND_CHUNK))
             .zip(active.par_chunks(BIND_CHUNK))
             .for_each(|(((((segment, fraction), local), base), weight), ids)| {
-                let mut fresh = Vec::with_capacity(ids.len());
-                let mut xs = Vec::with_capacity(ids.len());
-                for (j, &i) in ids.iter().enumerate() {
-                    if let Some((old, s)) = previous.and_then(|p| p.entry(i)) {
+                let (fresh, xs) =
+                    Reuse::split_chunk(previous, ids, input.positions, |j, old, s| {
                         segment[j] = old.segment[s];
                         fraction[j] = old.fraction[s];
                         local[j] = old.local[s];
                         base[j] = old.base[s];
                         weight[j] = old.weight[s];
-                    } else {
-                        fresh.push(j);
-                        xs.push(input.positions[i as usize]);
-                    }
-                }
+                    });
                 let mut found = vec![(0, 0.0, 0.0); xs.len()];
                 index.closest_each(&xs, &mut found);
                 for ((&v, u), (j, f, d2)) in fresh.iter().zip(xs).zip(found) {

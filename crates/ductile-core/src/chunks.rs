@@ -111,6 +111,30 @@ impl<'a, B: Slotted> Reuse<'a, B> {
         let s = *self.bind.slots().get(i as usize)?;
         (s != u32::MAX).then_some((self.bind, s as usize))
     }
+
+    /// Splits a chunk of active vertices `ids` of a bind into those whose entry an earlier
+    /// bind gives — `copy(j, old, s)` copies entry `s` of `old` into the chunk's slot `j` —
+    /// and the others, whose chunk slots and input `positions` it returns: the queries the
+    /// new bind answers (a lane group at a time).
+    pub fn split_chunk(
+        previous: Option<Self>,
+        ids: &[u32],
+        positions: &[glam::Vec3],
+        mut copy: impl FnMut(usize, &'a B, usize),
+    ) -> (Vec<usize>, Vec<glam::Vec3>) {
+        let mut fresh = Vec::with_capacity(ids.len());
+        let mut xs = Vec::with_capacity(ids.len());
+        for (j, &i) in ids.iter().enumerate() {
+            match previous.and_then(|p| p.entry(i)) {
+                Some((old, s)) => copy(j, old, s),
+                None => {
+                    fresh.push(j);
+                    xs.push(positions[i as usize]);
+                }
+            }
+        }
+        (fresh, xs)
+    }
 }
 
 /// Calls `f(k, &mut values[indices[k]])` for every `k`. When `indices` has at least

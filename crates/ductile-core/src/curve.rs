@@ -385,20 +385,14 @@ impl CurveTool {
             .zip(weights.par_chunks_mut(BIND_CHUNK * stride))
             .zip(active.par_chunks(BIND_CHUNK))
             .for_each(|((((params, offsets), firsts), weights), ids)| {
-                let mut fresh = Vec::with_capacity(ids.len());
-                let mut xs = Vec::with_capacity(ids.len());
-                for (j, &i) in ids.iter().enumerate() {
-                    if let Some((old, s)) = previous.and_then(|p| p.entry(i)) {
+                let (fresh, xs) =
+                    Reuse::split_chunk(previous, ids, input.positions, |j, old, s| {
                         params[j] = old.params[s];
                         offsets[j] = old.offsets[s];
                         firsts[j] = old.firsts[s];
                         weights[j * stride..(j + 1) * stride]
                             .copy_from_slice(&old.weights[s * stride..(s + 1) * stride]);
-                    } else {
-                        fresh.push(j);
-                        xs.push(input.positions[i as usize]);
-                    }
-                }
+                    });
                 let mut found = vec![(Closest::default(), 0.0); xs.len()];
                 pieces.closest_each(&xs, &mut found);
                 for ((&j, x), (c, _)) in fresh.iter().zip(xs).zip(found) {
