@@ -62,8 +62,8 @@ use crate::error::Result;
 use crate::resolve::resolve_area;
 
 /// Above this fraction (`1 / OUTPUT_FULL_DIVISOR`) of changed welded vertices the output is
-/// patched by parallel sweeps over every triangle and vertex rather than by following each
-/// changed vertex (both give the same bits). Measured on the head split 5×5 (221k
+/// patched by parallel sweeps over the blocks of triangles and stored vertices that hold a
+/// change rather than by following each changed vertex (both give the same bits). Measured on the head split 5×5 (221k
 /// vertices): one nose slider moves ~30 % of the vertices and takes 4.5 ms with 3, 2.9 ms
 /// with 6 to 16. Meshes under [`PARALLEL_THRESHOLD`] vertices are always patched vertex by
 /// vertex (waking the thread pool costs more there).
@@ -419,6 +419,23 @@ struct Links {
     tri_mark: Vec<bool>,
     /// Welded vertices whose normal must be summed again (set in parallel).
     around: Vec<AtomicBool>,
+    /// Blocks of [`BLOCK`] triangles that hold a triangle with a moved corner (set in
+    /// parallel, cleared by the sweep that reads them).
+    tri_blocks: Vec<AtomicBool>,
+    /// Blocks of [`BLOCK`] stored vertices that hold a copy of a moved vertex or of a corner
+    /// of such a triangle (set in parallel, cleared by the sweep that reads them).
+    stored_blocks: Vec<AtomicBool>,
+}
+
+/// Triangles and stored vertices are swept in blocks of this many; a block holding nothing
+/// that changed is skipped whole. Small enough that a lattice's region of a mesh whose
+/// vertices are ordered face by face (as subdivision and most exporters order them) leaves
+/// most blocks clean, large enough that the block flags stay in the first-level cache.
+const BLOCK: usize = 64;
+
+/// `n` cleared flags.
+fn flags(n: usize) -> Vec<AtomicBool> {
+    (0..n).map(|_| AtomicBool::new(false)).collect()
 }
 
 impl Links {
@@ -447,7 +464,9 @@ impl Links {
             copies,
             mark: vec![false; n],
             tri_mark: vec![false; topology.triangles.len()],
-            around: (0..n).map(|_| AtomicBool::new(false)).collect(),
+            around: flags(n),
+            tri_blocks: flags(topology.triangles.len().div_ceil(BLOCK)),
+            stored_blocks: flags(topology.stored_count().div_ceil(BLOCK)),
         }
     }
 
@@ -1035,14 +1054,21 @@ impl MeshEvaluator {
             self.output = Some(rest.output(&self.positions));
             return true;
         };
-        let moved: Vec<u32> = candidates
-            .iter()
-            .copied()
-            .filter(|&v| {
-                let s = topology.representative[v as usize] as usize;
-                !same_bits(self.positions[v as usize], out.positions[s])
-            })
-            .collect();
+        let (positions, stored) = (&self.positions, &out.positions);
+        let differs = |&v: &u32| {
+            let s = topology.representative[v as usize] as usize;
+            !same_bits(positions[v as usize], stored[s])
+        };
+        let moved: Vec<u32> = if candidates.len() >= PARALLEL_THRESHOLD {
+            candidates
+                .par_iter()
+                .copied()
+                .with_min_len(CHUNK)
+                .filter(differs)
+                .collect()
+        } else {
+            candidates.iter().copied().filter(differs).collect()
+        };
         if moved.is_empty() {
             return false;
         }
@@ -1055,36 +1081,65 @@ impl MeshEvaluator {
             && moved.len() * OUTPUT_FULL_DIVISOR > positions.len()
         {
             // Many moved vertices: sweeps in order (and in parallel) instead of following
-            // each moved vertex. A triangle with a moved corner gets a new face normal and
-            // marks its corners; every stored copy of a moved or marked vertex takes its
-            // position and sums its normal again.
+            // each moved vertex, over the blocks that hold something that changed. A moved
+            // vertex marks the blocks of its triangles and of its stored copies. In a marked
+            // block, a triangle with a moved corner gets a new face normal and marks its
+            // corners (and their copies' blocks); in a marked block of stored vertices, every
+            // copy of a moved or marked vertex takes its position and sums its normal again.
             for &v in &moved {
                 links.mark[v as usize] = true;
             }
-            let (mark, around) = (&links.mark, &links.around);
+            let links_ref = &*links;
+            moved.par_iter().with_min_len(CHUNK).for_each(|&v| {
+                for &t in links_ref.triangles_of(v) {
+                    links_ref.tri_blocks[t as usize / BLOCK].store(true, Ordering::Relaxed);
+                }
+                for &s in links_ref.copies_of(v) {
+                    links_ref.stored_blocks[s as usize / BLOCK].store(true, Ordering::Relaxed);
+                }
+            });
             faces
-                .par_iter_mut()
-                .zip(triangles.par_iter())
-                .with_min_len(CHUNK)
-                .for_each(|(f, &t)| {
-                    if t.iter().any(|&c| mark[c as usize]) {
-                        *f = face_normal(t, positions);
-                        for c in t {
-                            around[c as usize].store(true, Ordering::Relaxed);
+                .par_chunks_mut(BLOCK)
+                .zip(triangles.par_chunks(BLOCK))
+                .zip(links_ref.tri_blocks.par_iter())
+                .with_min_len(CHUNK / BLOCK)
+                .for_each(|((faces, tris), dirty)| {
+                    if !dirty.swap(false, Ordering::Relaxed) {
+                        return;
+                    }
+                    for (f, &t) in faces.iter_mut().zip(tris) {
+                        if t.iter().any(|&c| links_ref.mark[c as usize]) {
+                            *f = face_normal(t, positions);
+                            for c in t {
+                                let around = &links_ref.around[c as usize];
+                                if !around.load(Ordering::Relaxed) {
+                                    around.store(true, Ordering::Relaxed);
+                                    for &s in links_ref.copies_of(c) {
+                                        links_ref.stored_blocks[s as usize / BLOCK]
+                                            .store(true, Ordering::Relaxed);
+                                    }
+                                }
+                            }
                         }
                     }
                 });
-            let (links_ref, faces_ref) = (&*links, &*faces);
+            let faces_ref = &*faces;
             out.positions
-                .par_iter_mut()
-                .zip(out.normals.par_iter_mut())
-                .zip(topology.weld.par_iter())
-                .with_min_len(CHUNK)
-                .for_each(|((p, n), &w)| {
-                    let wi = w as usize;
-                    if links_ref.mark[wi] || links_ref.around[wi].load(Ordering::Relaxed) {
-                        *p = positions[w as usize];
-                        *n = vertex_normal(w, links_ref, faces_ref);
+                .par_chunks_mut(BLOCK)
+                .zip(out.normals.par_chunks_mut(BLOCK))
+                .zip(topology.weld.par_chunks(BLOCK))
+                .zip(links_ref.stored_blocks.par_iter())
+                .with_min_len(CHUNK / BLOCK)
+                .for_each(|(((ps, ns), weld), dirty)| {
+                    if !dirty.swap(false, Ordering::Relaxed) {
+                        return;
+                    }
+                    for ((p, n), &w) in ps.iter_mut().zip(ns.iter_mut()).zip(weld) {
+                        let wi = w as usize;
+                        if links_ref.mark[wi] || links_ref.around[wi].load(Ordering::Relaxed) {
+                            *p = positions[wi];
+                            *n = vertex_normal(w, links_ref, faces_ref);
+                        }
                     }
                 });
             links

@@ -917,3 +917,71 @@ fn layers_above_a_change_are_refreshed_on_the_moved_vertices() {
         "vertices enter and leave the volume: {lens:?}"
     );
 }
+
+/// Edits that move more than an eighth of a mesh above the parallel threshold take the
+/// block sweeps of the output patch, smaller ones follow each moved vertex; both, one after
+/// the other, must give a fresh evaluation's bits. The mesh has a seam (stored copies) and a
+/// vertex in no triangle inside the lattice, whose block holds nothing else that moves.
+#[test]
+fn large_edits_patch_the_output_in_blocks_exactly() {
+    use ductile_core::lattice::{ControlEdit, LatticeBasis, LatticeFrame, LatticeTool};
+
+    const ROWS: usize = 130;
+    const COLUMNS: usize = 160;
+    let mut mesh = grid(ROWS, COLUMNS + 1, false, |r, c| {
+        let a = std::f32::consts::TAU * (c % COLUMNS) as f32 / COLUMNS as f32;
+        Vec3::new(a.cos(), r as f32 * 0.1, a.sin())
+    });
+    mesh.normals = None;
+    mesh.uvs = None;
+    mesh.positions.push(Vec3::new(0.0, 5.0, 0.0));
+    let rest = RestMesh::new(mesh, "big tube").unwrap();
+    assert!(rest.welded_positions().len() >= PARALLEL_THRESHOLD);
+    let lattice = |y0: f32, height: f32, dz: f32| {
+        Tool::Lattice(LatticeTool {
+            frame: LatticeFrame {
+                origin: Vec3::new(-1.2, y0, -1.2),
+                s: Vec3::new(2.4, 0.0, 0.0),
+                t: Vec3::new(0.0, height, 0.0),
+                u: Vec3::new(0.0, 0.0, 2.4),
+            },
+            counts: (2, 2, 2),
+            basis: LatticeBasis::Bernstein,
+            points: vec![ControlEdit {
+                at: (1, 1, 1),
+                offset: Vec3::new(0.1, 0.0, dz),
+                weight: 1.0,
+            }],
+            falloff: 0.0,
+        })
+    };
+    let mut doc = scene();
+    doc.mesh_mut("m").unwrap().stack = vec![LayerSpec::new("wide"), LayerSpec::new("narrow")];
+    doc.nodes.push(node(
+        "wide",
+        Some("m"),
+        NodeKind::Tool(lattice(1.0, 8.0, 0.1)),
+    ));
+    doc.nodes.push(node(
+        "narrow",
+        Some("m"),
+        NodeKind::Tool(lattice(11.5, 1.0, 0.1)),
+    ));
+    let mut ev = MeshEvaluator::new("m", rest.clone());
+    let u = ev.update(&doc);
+    check_against_fresh(&ev, &u, &doc, &rest);
+    for (k, dz) in [0.3_f32, -0.2, 0.25, 0.05, -0.4, 0.2]
+        .into_iter()
+        .enumerate()
+    {
+        let (name, y0, height) = if k % 3 == 2 {
+            ("narrow", 11.5, 1.0)
+        } else {
+            ("wide", 1.0, 8.0)
+        };
+        doc.node_mut(name).unwrap().kind = NodeKind::Tool(lattice(y0, height, dz));
+        let u = ev.update(&doc);
+        assert!(u.as_ref().is_ok_and(|u| u.changed), "edit {k}: {u:?}");
+        check_against_fresh(&ev, &u, &doc, &rest);
+    }
+}
