@@ -20,6 +20,7 @@
 //! `docs/performance.md`, "Standard suite".
 
 use std::path::Path;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::Context as _;
@@ -114,8 +115,38 @@ pub struct Prepared {
     pub layers: usize,
     /// Worker threads.
     pub threads: usize,
-    /// One run of the timed work, inside the case's thread pool.
-    pub run: Box<dyn FnMut() -> anyhow::Result<()>>,
+    /// The case's thread pool, which the timed runs are made from inside ([`Prepared::time`])
+    /// so that a run is the work alone: entering a pool from another thread means waking a
+    /// pool thread and being woken when it is done, 150–300 µs on this project's VM (timed
+    /// with an empty job), a sixth of the identikit case. `None` for the batch, which starts
+    /// its own threads.
+    pub pool: Option<Arc<rayon::ThreadPool>>,
+    /// One run of the timed work, in the case's thread pool.
+    pub run: Box<dyn FnMut() -> anyhow::Result<()> + Send>,
+}
+
+impl Prepared {
+    /// Makes `n` runs one after the other from inside the case's pool and returns the
+    /// wall-clock time of each.
+    ///
+    /// # Errors
+    /// The first run's error.
+    pub fn time(&mut self, n: usize) -> anyhow::Result<Vec<Duration>> {
+        let Self { pool, run, .. } = self;
+        let mut runs = || -> anyhow::Result<Vec<Duration>> {
+            (0..n)
+                .map(|_| {
+                    let t = Instant::now();
+                    run()?;
+                    Ok(t.elapsed())
+                })
+                .collect()
+        };
+        match pool {
+            Some(pool) => pool.install(runs),
+            None => runs(),
+        }
+    }
 }
 
 impl std::fmt::Debug for Prepared {
@@ -192,10 +223,12 @@ impl Case {
     /// caches what several cases share (the million-vertex head and its stack).
     pub fn prepare(self, fixtures: &mut Fixtures) -> anyhow::Result<Prepared> {
         let threads = self.threads();
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .context("cannot start the thread pool")?;
+        let pool = Arc::new(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .context("cannot start the thread pool")?,
+        );
         match self {
             Case::Identikit => {
                 let (doc, rest) = identikit_30()?;
@@ -225,6 +258,7 @@ impl Case {
                     vertices,
                     layers,
                     threads,
+                    pool: Some(Arc::clone(&pool)),
                     run: Box::new(move || {
                         flip = !flip;
                         if let NodeKind::Tool(t) = &mut doc.node_mut(&name)?.kind {
@@ -250,6 +284,7 @@ impl Case {
                     vertices: MILLION,
                     layers: 1,
                     threads,
+                    pool: Some(Arc::clone(&pool)),
                     run: Box::new(move || {
                         pool.install(|| -> anyhow::Result<()> {
                             let bind = tool.bind(&BindInput {
@@ -279,6 +314,7 @@ impl Case {
                     vertices,
                     layers,
                     threads,
+                    pool: None,
                     run: Box::new(move || {
                         let template = batch::Template::new(&doc, "head", &rest)?;
                         let records = batch::run(&template, &jobs, threads, false, |_| {});
@@ -299,13 +335,10 @@ impl Case {
         let mut p = self
             .prepare(fixtures)
             .with_context(|| format!("case {}", self.name()))?;
-        (p.run)().with_context(|| format!("case {}", self.name()))?;
-        let mut times = Vec::with_capacity(samples);
-        for _ in 0..samples.max(1) {
-            let t = Instant::now();
-            (p.run)().with_context(|| format!("case {}", self.name()))?;
-            times.push(t.elapsed());
-        }
+        p.time(1).with_context(|| format!("case {}", self.name()))?;
+        let mut times = p
+            .time(samples.max(1))
+            .with_context(|| format!("case {}", self.name()))?;
         let (median, p95) = median_p95(&mut times);
         Ok(Outcome {
             case: self.name(),
@@ -326,13 +359,14 @@ fn full_evaluation(
     doc: &Document,
     node: &str,
     rest: RestMesh,
-    pool: rayon::ThreadPool,
+    pool: Arc<rayon::ThreadPool>,
 ) -> anyhow::Result<Prepared> {
     let stack: Stack = doc.resolve_stack(node, &rest)?;
     Ok(Prepared {
         vertices: rest.welded_positions().len(),
         layers: stack.layers.len(),
         threads: pool.current_num_threads(),
+        pool: Some(Arc::clone(&pool)),
         run: Box::new(move || {
             pool.install(|| std::hint::black_box(stack.evaluate(&rest)))?;
             Ok(())
