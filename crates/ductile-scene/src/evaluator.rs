@@ -46,7 +46,7 @@
 
 use std::collections::HashMap;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 
 use glam::Vec3;
 
@@ -61,7 +61,7 @@ use crate::document::{Area, Document};
 use crate::error::Result;
 use crate::resolve::resolve_area;
 
-/// Above this fraction (`1 / OUTPUT_FULL_DIVISOR`) of changed welded vertices the output is
+/// Above this fraction (`1 / OUTPUT_FULL_DIVISOR`) of candidate welded vertices the output is
 /// patched by parallel sweeps over the blocks of triangles and stored vertices that hold a
 /// change rather than by following each changed vertex (both give the same bits). Measured on the head split 5×5 (221k
 /// vertices): one nose slider moves ~30 % of the vertices and takes 4.5 ms with 3, 2.9 ms
@@ -417,8 +417,14 @@ struct Links {
     copies: Vec<u32>,
     mark: Vec<bool>,
     tri_mark: Vec<bool>,
-    /// Welded vertices whose normal must be summed again (set in parallel).
-    around: Vec<AtomicBool>,
+    /// The block sweeps' current stamp (1 to 255): a welded vertex is moved, or around a
+    /// moved one, in this sweep when its entry of `moved` or `around` holds it, so nothing
+    /// is cleared after a sweep (only all of them when the stamp wraps).
+    stamp: u8,
+    /// Welded vertices that moved (stamped in parallel).
+    moved: Vec<AtomicU8>,
+    /// Welded vertices whose normal must be summed again (stamped in parallel).
+    around: Vec<AtomicU8>,
     /// Blocks of [`BLOCK`] triangles that hold a triangle with a moved corner (set in
     /// parallel, cleared by the sweep that reads them).
     tri_blocks: Vec<AtomicBool>,
@@ -436,6 +442,11 @@ const BLOCK: usize = 64;
 /// `n` cleared flags.
 fn flags(n: usize) -> Vec<AtomicBool> {
     (0..n).map(|_| AtomicBool::new(false)).collect()
+}
+
+/// `n` stamps that hold no sweep's stamp.
+fn stamps(n: usize) -> Vec<AtomicU8> {
+    (0..n).map(|_| AtomicU8::new(0)).collect()
 }
 
 impl Links {
@@ -464,7 +475,9 @@ impl Links {
             copies,
             mark: vec![false; n],
             tri_mark: vec![false; topology.triangles.len()],
-            around: flags(n),
+            stamp: 0,
+            moved: stamps(n),
+            around: stamps(n),
             tri_blocks: flags(topology.triangles.len().div_ceil(BLOCK)),
             stored_blocks: flags(topology.stored_count().div_ceil(BLOCK)),
         }
@@ -476,6 +489,28 @@ impl Links {
 
     fn copies_of(&self, v: u32) -> &[u32] {
         row(&self.copy_offsets, &self.copies, v)
+    }
+
+    /// A stamp that no entry of `moved` or `around` holds yet, for a new block sweep.
+    fn next_stamp(&mut self) -> u8 {
+        if self.stamp == u8::MAX {
+            for a in self.moved.iter_mut().chain(self.around.iter_mut()) {
+                *a.get_mut() = 0;
+            }
+            self.stamp = 0;
+        }
+        self.stamp += 1;
+        self.stamp
+    }
+
+    /// Flags the blocks of `v`'s triangles and stored copies for the block sweeps.
+    fn flag_blocks(&self, v: u32) {
+        for &t in self.triangles_of(v) {
+            self.tri_blocks[t as usize / BLOCK].store(true, Ordering::Relaxed);
+        }
+        for &s in self.copies_of(v) {
+            self.stored_blocks[s as usize / BLOCK].store(true, Ordering::Relaxed);
+        }
     }
 }
 
@@ -1054,68 +1089,61 @@ impl MeshEvaluator {
             self.output = Some(rest.output(&self.positions));
             return true;
         };
-        let (positions, stored) = (&self.positions, &out.positions);
-        let differs = |&v: &u32| {
-            let s = topology.representative[v as usize] as usize;
-            !same_bits(positions[v as usize], stored[s])
-        };
-        let moved: Vec<u32> = if candidates.len() >= PARALLEL_THRESHOLD {
-            candidates
-                .par_iter()
-                .copied()
-                .with_min_len(CHUNK)
-                .filter(differs)
-                .collect()
-        } else {
-            candidates.iter().copied().filter(differs).collect()
-        };
-        if moved.is_empty() {
-            return false;
-        }
         let links = self.links.get_or_insert_with(|| Links::new(topology));
         let triangles = &topology.triangles;
         let positions = &self.positions;
         let faces = &mut self.faces;
+        let differs = |v: u32| {
+            let s = topology.representative[v as usize] as usize;
+            !same_bits(positions[v as usize], out.positions[s])
+        };
         if faces.len() == triangles.len()
             && positions.len() >= PARALLEL_THRESHOLD
-            && moved.len() * OUTPUT_FULL_DIVISOR > positions.len()
+            && candidates.len() * OUTPUT_FULL_DIVISOR > positions.len()
         {
-            // Many moved vertices: sweeps in order (and in parallel) instead of following
-            // each moved vertex, over the blocks that hold something that changed. A moved
-            // vertex marks the blocks of its triangles and of its stored copies. In a marked
-            // block, a triangle with a moved corner gets a new face normal and marks its
-            // corners (and their copies' blocks); in a marked block of stored vertices, every
-            // copy of a moved or marked vertex takes its position and sums its normal again.
-            for &v in &moved {
-                links.mark[v as usize] = true;
+            // Many candidates: sweeps in order (and in parallel) instead of following each
+            // moved vertex, over the blocks that hold something that changed. One parallel
+            // pass keeps the candidates that moved, stamps them and flags the blocks of their
+            // triangles and stored copies. In a flagged block, a triangle with a moved corner
+            // gets a new face normal and stamps its corners (flagging their copies' blocks);
+            // in a flagged block of stored vertices, every copy of a moved or stamped vertex
+            // takes its position and sums its normal again.
+            let stamp = links.next_stamp();
+            let links = &*links;
+            let moved = candidates
+                .par_iter()
+                .with_min_len(CHUNK)
+                .filter(|&&v| {
+                    if !differs(v) {
+                        return false;
+                    }
+                    links.moved[v as usize].store(stamp, Ordering::Relaxed);
+                    links.flag_blocks(v);
+                    true
+                })
+                .count();
+            if moved == 0 {
+                return false;
             }
-            let links_ref = &*links;
-            moved.par_iter().with_min_len(CHUNK).for_each(|&v| {
-                for &t in links_ref.triangles_of(v) {
-                    links_ref.tri_blocks[t as usize / BLOCK].store(true, Ordering::Relaxed);
-                }
-                for &s in links_ref.copies_of(v) {
-                    links_ref.stored_blocks[s as usize / BLOCK].store(true, Ordering::Relaxed);
-                }
-            });
+            let is =
+                |marks: &[AtomicU8], v: u32| marks[v as usize].load(Ordering::Relaxed) == stamp;
             faces
                 .par_chunks_mut(BLOCK)
                 .zip(triangles.par_chunks(BLOCK))
-                .zip(links_ref.tri_blocks.par_iter())
+                .zip(links.tri_blocks.par_iter())
                 .with_min_len(CHUNK / BLOCK)
                 .for_each(|((faces, tris), dirty)| {
                     if !dirty.swap(false, Ordering::Relaxed) {
                         return;
                     }
                     for (f, &t) in faces.iter_mut().zip(tris) {
-                        if t.iter().any(|&c| links_ref.mark[c as usize]) {
+                        if t.iter().any(|&c| is(&links.moved, c)) {
                             *f = face_normal(t, positions);
                             for c in t {
-                                let around = &links_ref.around[c as usize];
-                                if !around.load(Ordering::Relaxed) {
-                                    around.store(true, Ordering::Relaxed);
-                                    for &s in links_ref.copies_of(c) {
-                                        links_ref.stored_blocks[s as usize / BLOCK]
+                                if !is(&links.around, c) {
+                                    links.around[c as usize].store(stamp, Ordering::Relaxed);
+                                    for &s in links.copies_of(c) {
+                                        links.stored_blocks[s as usize / BLOCK]
                                             .store(true, Ordering::Relaxed);
                                     }
                                 }
@@ -1123,34 +1151,38 @@ impl MeshEvaluator {
                         }
                     }
                 });
-            let faces_ref = &*faces;
+            let faces = &*faces;
             out.positions
                 .par_chunks_mut(BLOCK)
                 .zip(out.normals.par_chunks_mut(BLOCK))
                 .zip(topology.weld.par_chunks(BLOCK))
-                .zip(links_ref.stored_blocks.par_iter())
+                .zip(links.stored_blocks.par_iter())
                 .with_min_len(CHUNK / BLOCK)
                 .for_each(|(((ps, ns), weld), dirty)| {
                     if !dirty.swap(false, Ordering::Relaxed) {
                         return;
                     }
                     for ((p, n), &w) in ps.iter_mut().zip(ns.iter_mut()).zip(weld) {
-                        let wi = w as usize;
-                        if links_ref.mark[wi] || links_ref.around[wi].load(Ordering::Relaxed) {
-                            *p = positions[wi];
-                            *n = vertex_normal(w, links_ref, faces_ref);
+                        if is(&links.moved, w) || is(&links.around, w) {
+                            *p = positions[w as usize];
+                            *n = vertex_normal(w, links, faces);
                         }
                     }
                 });
-            links
-                .around
-                .par_iter()
-                .with_min_len(CHUNK)
-                .for_each(|a| a.store(false, Ordering::Relaxed));
-            for &v in &moved {
-                links.mark[v as usize] = false;
-            }
             return true;
+        }
+        let moved: Vec<u32> = if candidates.len() >= PARALLEL_THRESHOLD {
+            candidates
+                .par_iter()
+                .copied()
+                .with_min_len(CHUNK)
+                .filter(|&v| differs(v))
+                .collect()
+        } else {
+            candidates.iter().copied().filter(|&v| differs(v)).collect()
+        };
+        if moved.is_empty() {
+            return false;
         }
         if faces.len() != triangles.len() {
             // Every normal: the face normals once, then each vertex's sum over its triangles

@@ -984,4 +984,13 @@ fn large_edits_patch_the_output_in_blocks_exactly() {
         assert!(u.as_ref().is_ok_and(|u| u.changed), "edit {k}: {u:?}");
         check_against_fresh(&ev, &u, &doc, &rest);
     }
+    // More sweeps than the sweep stamps have values (255): they wrap and start again.
+    for k in 0..300 {
+        let dz = if k % 2 == 0 { 0.15 } else { -0.1 };
+        doc.node_mut("wide").unwrap().kind = NodeKind::Tool(lattice(1.0, 8.0, dz));
+        let u = ev.update(&doc);
+        if k % 37 == 0 || k >= 250 && k % 5 == 0 {
+            check_against_fresh(&ev, &u, &doc, &rest);
+        }
+    }
 }
