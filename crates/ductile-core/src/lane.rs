@@ -243,6 +243,13 @@ impl Lane {
     #[inline(always)]
     #[must_use]
     pub(crate) fn exp(self) -> Self {
+        // The common case, every lane in [−103.63, 87]: finite, not below the underflow to
+        // 0, and `2^r` at most 2^126, so each special case below would keep the polynomial's
+        // value; the same operations without them.
+        if (self.simd_ge(Self::splat(-103.63)) & self.simd_le(Self::splat(87.0))).all() {
+            let r = (self * Self::splat(LOG2_E)).round_ties_even();
+            return self.exp_reduced(r) * r.pow2n();
+        }
         let finite = self.is_finite();
         let neg_underflow = self.simd_lt(Self::splat(-103.63)) & finite;
         if neg_underflow.all() {
@@ -255,15 +262,7 @@ impl Lane {
         // `2^(r − 127)` where `r` passes 127, else 1 (and a product by 1 changes no bits).
         let scaled = big.any();
         let excess = big.select(r - max_r, Self::ZERO);
-        let x = self - r * Self::splat(LN2_HI);
-        let x = x - r * Self::splat(LN2_LO);
-        let x2 = x * x;
-        let x4 = x2 * x2;
-        let z = (Self::splat(EXP_P[3]) * x + Self::splat(EXP_P[2])) * x2
-            + ((Self::splat(EXP_P[5]) * x + Self::splat(EXP_P[4])) * x4
-                + (Self::splat(EXP_P[1]) * x + Self::splat(EXP_P[0])));
-        let z = z * x2 + x;
-        let z = z + Self::splat(1.0);
+        let z = self.exp_reduced(r);
         let z = if scaled { z * excess.pow2n() } else { z };
         let z = z * r_safe.pow2n();
         let nan = self.is_nan();
@@ -273,6 +272,21 @@ impl Lane {
         let negative = self.is_sign_negative();
         let result = (!finite & !negative & !nan).select(INFINITY, result);
         (!finite & negative & !nan).select(Self::ZERO, result)
+    }
+
+    /// `e^(x − r·ln 2)` for `x = self` and `r` the integer nearest `x / ln 2`: the range
+    /// reduction by `ln 2` in two parts, then the degree-5 polynomial, of [`Lane::exp`].
+    #[inline(always)]
+    fn exp_reduced(self, r: Self) -> Self {
+        let x = self - r * Self::splat(LN2_HI);
+        let x = x - r * Self::splat(LN2_LO);
+        let x2 = x * x;
+        let x4 = x2 * x2;
+        let z = (Self::splat(EXP_P[3]) * x + Self::splat(EXP_P[2])) * x2
+            + ((Self::splat(EXP_P[5]) * x + Self::splat(EXP_P[4])) * x4
+                + (Self::splat(EXP_P[1]) * x + Self::splat(EXP_P[0])));
+        let z = z * x2 + x;
+        z + Self::splat(1.0)
     }
 
     /// `ln x`: `wide::f32x16::ln` (mantissa in `[√½, √2)`, a degree-8 polynomial), the same
@@ -584,6 +598,10 @@ mod tests {
             -103.6,
             -103.63,
             -103.7,
+            86.99,
+            87.0,
+            87.01,
+            -103.62,
             0.5,
             -0.5,
             1.5,
@@ -598,6 +616,26 @@ mod tests {
     #[test]
     fn exp_has_the_bits_of_wide_without_fma() {
         same(&inputs(), Lane::exp, f32x16::exp);
+    }
+
+    /// Whole lane groups at the ends of `exp`'s common-case range and just past them, where
+    /// it takes its short path or the full one.
+    #[test]
+    fn exp_of_whole_groups_at_the_short_path_ends_has_the_bits_of_wide() {
+        for x in [
+            -103.63_f32,
+            -103.62,
+            -103.64,
+            86.99,
+            87.0,
+            87.01,
+            88.72,
+            -87.3,
+            0.0,
+            -0.0,
+        ] {
+            same(&[x; LANES], Lane::exp, f32x16::exp);
+        }
     }
 
     #[test]
