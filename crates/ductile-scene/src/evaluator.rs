@@ -63,11 +63,14 @@ use crate::resolve::resolve_area;
 
 /// Above this fraction (`1 / OUTPUT_FULL_DIVISOR`) of candidate welded vertices the output is
 /// patched by parallel sweeps over the blocks of triangles and stored vertices that hold a
-/// change rather than by following each changed vertex (both give the same bits). Measured on the head split 5×5 (221k
-/// vertices): one nose slider moves ~30 % of the vertices and takes 4.5 ms with 3, 2.9 ms
-/// with 6 to 16. Meshes under [`PARALLEL_THRESHOLD`] vertices are always patched vertex by
-/// vertex (waking the thread pool costs more there).
-const OUTPUT_FULL_DIVISOR: usize = 8;
+/// change rather than by following each changed vertex (both give the same bits). Measured on
+/// the head split 5×5 (221k vertices), with full sweeps: one nose slider moves ~30 % of the
+/// vertices and took 4.5 ms with 3, 2.9 ms with 6 to 16. Since the sweeps skip clean blocks,
+/// 32: the FFSD drag on the nose (`drag/ffsd-point/head-221k` of the `studio` bench) went
+/// 3.96 / 4.25 → 2.98 / 2.43 ms against 8, the other edits there within the host's noise.
+/// Meshes under [`PARALLEL_THRESHOLD`] vertices are always patched vertex by vertex (waking
+/// the thread pool costs more there).
+const OUTPUT_FULL_DIVISOR: usize = 32;
 
 /// What one [`MeshEvaluator::update`] did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

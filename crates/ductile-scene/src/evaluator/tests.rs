@@ -918,8 +918,8 @@ fn layers_above_a_change_are_refreshed_on_the_moved_vertices() {
     );
 }
 
-/// Edits that move more than an eighth of a mesh above the parallel threshold take the
-/// block sweeps of the output patch, smaller ones follow each moved vertex; both, one after
+/// Edits that move more than 1/32 of a mesh above the parallel threshold take the block
+/// sweeps of the output patch, smaller ones follow each moved vertex; both, one after
 /// the other, must give a fresh evaluation's bits. The mesh has a seam (stored copies) and a
 /// vertex in no triangle inside the lattice, whose block holds nothing else that moves.
 #[test]
@@ -965,7 +965,7 @@ fn large_edits_patch_the_output_in_blocks_exactly() {
     doc.nodes.push(node(
         "narrow",
         Some("m"),
-        NodeKind::Tool(lattice(11.5, 1.0, 0.1)),
+        NodeKind::Tool(lattice(11.55, 0.2, 0.1)),
     ));
     let mut ev = MeshEvaluator::new("m", rest.clone());
     let u = ev.update(&doc);
@@ -975,7 +975,7 @@ fn large_edits_patch_the_output_in_blocks_exactly() {
         .enumerate()
     {
         let (name, y0, height) = if k % 3 == 2 {
-            ("narrow", 11.5, 1.0)
+            ("narrow", 11.55, 0.2)
         } else {
             ("wide", 1.0, 8.0)
         };
