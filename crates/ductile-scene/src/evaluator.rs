@@ -418,15 +418,15 @@ struct Links {
     tris: Vec<u32>,
     copy_offsets: Vec<u32>,
     copies: Vec<u32>,
-    mark: Vec<bool>,
     tri_mark: Vec<bool>,
-    /// The block sweeps' current stamp (1 to 255): a welded vertex is moved, or around a
-    /// moved one, in this sweep when its entry of `moved` or `around` holds it, so nothing
-    /// is cleared after a sweep (only all of them when the stamp wraps).
+    /// The current patch's stamp (1 to 255): a welded vertex is moved, or around a moved
+    /// one, in this patch when its entry of `moved` or `around` holds it, so nothing is
+    /// cleared after a patch (only all of them when the stamp wraps).
     stamp: u8,
-    /// Welded vertices that moved (stamped in parallel).
+    /// Welded vertices that moved (stamped in parallel by the block sweeps).
     moved: Vec<AtomicU8>,
-    /// Welded vertices whose normal must be summed again (stamped in parallel).
+    /// Welded vertices whose normal must be summed again (stamped, in parallel by the block
+    /// sweeps).
     around: Vec<AtomicU8>,
     /// Blocks of [`BLOCK`] triangles that hold a triangle with a moved corner (set in
     /// parallel, cleared by the sweep that reads them).
@@ -476,7 +476,6 @@ impl Links {
             tris,
             copy_offsets,
             copies,
-            mark: vec![false; n],
             tri_mark: vec![false; topology.triangles.len()],
             stamp: 0,
             moved: stamps(n),
@@ -1212,6 +1211,7 @@ impl MeshEvaluator {
         }
         // The triangles around the moved vertices get new face normals (the others keep
         // theirs: same corners, same bits), then every corner of those triangles its sum.
+        let stamp = links.next_stamp();
         let mut changed = Vec::new();
         for &v in &moved {
             for &s in links.copies_of(v) {
@@ -1229,14 +1229,12 @@ impl MeshEvaluator {
             links.tri_mark[t as usize] = false;
             faces[t as usize] = face_normal(triangles[t as usize], positions);
             for c in triangles[t as usize] {
-                if !links.mark[c as usize] {
-                    links.mark[c as usize] = true;
+                let a = links.around[c as usize].get_mut();
+                if *a != stamp {
+                    *a = stamp;
                     around.push(c);
                 }
             }
-        }
-        for &v in &around {
-            links.mark[v as usize] = false;
         }
         let (links, faces) = (&*links, &*faces);
         let normal = |&v: &u32| vertex_normal(v, links, faces);

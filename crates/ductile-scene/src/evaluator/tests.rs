@@ -638,6 +638,28 @@ fn a_rebound_tool_keeps_its_mask() {
     );
 }
 
+/// A Bernstein 2×2×2 lattice over `x, z ∈ [−1.2, 1.2]`, `y ∈ [y0, y0 + height]`, its
+/// control point (1, 1, 1) moved by `offset`.
+fn band_lattice(y0: f32, height: f32, offset: Vec3) -> Tool {
+    use ductile_core::lattice::{ControlEdit, LatticeBasis, LatticeFrame, LatticeTool};
+    Tool::Lattice(LatticeTool {
+        frame: LatticeFrame {
+            origin: Vec3::new(-1.2, y0, -1.2),
+            s: Vec3::new(2.4, 0.0, 0.0),
+            t: Vec3::new(0.0, height, 0.0),
+            u: Vec3::new(0.0, 0.0, 2.4),
+        },
+        counts: (2, 2, 2),
+        basis: LatticeBasis::Bernstein,
+        points: vec![ControlEdit {
+            at: (1, 1, 1),
+            offset,
+            weight: 1.0,
+        }],
+        falloff: 0.0,
+    })
+}
+
 /// A tool whose deformed state changes (a sketch bend's target, a curve's deformed control
 /// points, a lattice's control points) on an unchanged input keeps its binding — for the
 /// sketch tool its region of interest, skinning and Eq. 9 factorisation — and the result is
@@ -645,7 +667,6 @@ fn a_rebound_tool_keeps_its_mask() {
 #[test]
 fn a_changed_deformed_state_keeps_the_binding() {
     use ductile_core::curve::{CurveBasis, CurveTool};
-    use ductile_core::lattice::{ControlEdit, LatticeBasis, LatticeFrame, LatticeTool};
     use ductile_core::sketch::partition::Partition;
     use ductile_core::sketch::tool::{Curve, SketchMode, SketchTool};
 
@@ -693,24 +714,7 @@ fn a_changed_deformed_state_keeps_the_binding() {
             ],
         })
     };
-    let lattice = |dz: f32| {
-        Tool::Lattice(LatticeTool {
-            frame: LatticeFrame {
-                origin: Vec3::new(-1.2, 2.0, -1.2),
-                s: Vec3::new(2.4, 0.0, 0.0),
-                t: Vec3::new(0.0, 1.2, 0.0),
-                u: Vec3::new(0.0, 0.0, 2.4),
-            },
-            counts: (2, 2, 2),
-            basis: LatticeBasis::Bernstein,
-            points: vec![ControlEdit {
-                at: (1, 1, 1),
-                offset: Vec3::new(0.0, 0.0, dz),
-                weight: 1.0,
-            }],
-            falloff: 0.0,
-        })
-    };
+    let lattice = |dz: f32| band_lattice(2.0, 1.2, Vec3::new(0.0, 0.0, dz));
     let mut doc = scene();
     doc.mesh_mut("m").unwrap().stack = vec![
         LayerSpec::new("bend"),
@@ -924,8 +928,6 @@ fn layers_above_a_change_are_refreshed_on_the_moved_vertices() {
 /// vertex in no triangle inside the lattice, whose block holds nothing else that moves.
 #[test]
 fn large_edits_patch_the_output_in_blocks_exactly() {
-    use ductile_core::lattice::{ControlEdit, LatticeBasis, LatticeFrame, LatticeTool};
-
     const ROWS: usize = 130;
     const COLUMNS: usize = 160;
     let mut mesh = grid(ROWS, COLUMNS + 1, false, |r, c| {
@@ -937,24 +939,7 @@ fn large_edits_patch_the_output_in_blocks_exactly() {
     mesh.positions.push(Vec3::new(0.0, 5.0, 0.0));
     let rest = RestMesh::new(mesh, "big tube").unwrap();
     assert!(rest.welded_positions().len() >= PARALLEL_THRESHOLD);
-    let lattice = |y0: f32, height: f32, dz: f32| {
-        Tool::Lattice(LatticeTool {
-            frame: LatticeFrame {
-                origin: Vec3::new(-1.2, y0, -1.2),
-                s: Vec3::new(2.4, 0.0, 0.0),
-                t: Vec3::new(0.0, height, 0.0),
-                u: Vec3::new(0.0, 0.0, 2.4),
-            },
-            counts: (2, 2, 2),
-            basis: LatticeBasis::Bernstein,
-            points: vec![ControlEdit {
-                at: (1, 1, 1),
-                offset: Vec3::new(0.1, 0.0, dz),
-                weight: 1.0,
-            }],
-            falloff: 0.0,
-        })
-    };
+    let lattice = |y0: f32, height: f32, dz: f32| band_lattice(y0, height, Vec3::new(0.1, 0.0, dz));
     let mut doc = scene();
     doc.mesh_mut("m").unwrap().stack = vec![LayerSpec::new("wide"), LayerSpec::new("narrow")];
     doc.nodes.push(node(
