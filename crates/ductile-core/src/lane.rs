@@ -459,6 +459,11 @@ impl Lanes3 {
     /// The positions of `active` (up to a lane group; the last one repeated to fill the lanes).
     #[inline(always)]
     pub(crate) fn gather(positions: &[Vec3], active: &[u32]) -> Self {
+        // A whole group: its points gathered in order, then split as `load` splits them.
+        if let Ok(active) = <&[u32; LANES]>::try_from(active) {
+            let points: [Vec3; LANES] = each!(|j| positions[active[j] as usize]);
+            return Self::load(&points);
+        }
         let mut lanes = Self::ZERO;
         let last = active.len() - 1;
         for j in 0..LANES {
@@ -470,6 +475,17 @@ impl Lanes3 {
     /// Up to a lane group of points (the last one repeated to fill the lanes).
     #[inline(always)]
     pub(crate) fn load(points: &[Vec3]) -> Self {
+        // A whole group: the coordinates are every third float of 48 consecutive ones, a
+        // fixed pattern the compiler turns into vector shuffles (the loop below goes through
+        // memory one float at a time).
+        if let Ok(points) = <&[Vec3; LANES]>::try_from(points) {
+            let f: &[f32; 3 * LANES] = bytemuck::cast_ref(points);
+            return Self {
+                x: Lane(each!(|j| f[3 * j])),
+                y: Lane(each!(|j| f[3 * j + 1])),
+                z: Lane(each!(|j| f[3 * j + 2])),
+            };
+        }
         let mut lanes = Self::ZERO;
         let last = points.len() - 1;
         for j in 0..LANES {
@@ -556,6 +572,32 @@ impl Lanes3 {
 mod tests {
     use super::*;
     use wide::f32x16;
+
+    /// Loading and gathering whole and partial groups put point `j` in lane `j` (the last
+    /// point repeated in the lanes past a partial group's end).
+    #[test]
+    fn loaded_and_gathered_lanes_hold_their_points() {
+        let points: Vec<Vec3> = (0..40)
+            .map(|i| Vec3::new(i as f32, -(i as f32) * 0.5, 1e3 + i as f32))
+            .collect();
+        let ids: Vec<u32> = (0..40).map(|i| (i * 7 % 40) as u32).collect();
+        for len in [1, 5, LANES - 1, LANES] {
+            for start in [0, 3, 24] {
+                let part = &points[start..start + len];
+                let group = &ids[start..start + len];
+                let (loaded, gathered) = (Lanes3::load(part), Lanes3::gather(&points, group));
+                for j in 0..LANES {
+                    let k = j.min(len - 1);
+                    assert_eq!(loaded.lane(j), part[k], "load, {len} from {start}, lane {j}");
+                    assert_eq!(
+                        gathered.lane(j),
+                        points[group[k] as usize],
+                        "gather, {len} from {start}, lane {j}"
+                    );
+                }
+            }
+        }
+    }
 
     /// Our lanes and `wide`'s on the same inputs: the same bits, NaN payloads included.
     fn same(inputs: &[f32], ours: impl Fn(Lane) -> Lane, theirs: impl Fn(f32x16) -> f32x16) {

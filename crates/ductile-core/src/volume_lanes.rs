@@ -320,6 +320,11 @@ fn weigh_group(
     } else {
         Lane::ZERO
     };
+    // Most groups of a small volume's mask are outside it: with nothing earlier to keep,
+    // a group of no positive weight appends nothing, and the lane loop is skipped.
+    if earlier.is_none() && !w.simd_gt(Lane::ZERO).any() {
+        return;
+    }
     for (&i, &w) in ids.iter().zip(w.as_array()) {
         let w = match earlier {
             Some(e) if !e.is_stale(i) => e.weight(i),
