@@ -21,7 +21,7 @@
 //! `D(x) = x + Σⱼ Nⱼ(t)(Qⱼ − Pⱼ) + Σᵢ Mᵢ(t)(Rᵢ − I) o`, which is exactly `x` (bit for bit)
 //! when `Q = P` and exactly `x` wherever no moved control point has a non-zero basis function.
 
-use glam::{Affine3A, Mat3, Quat, Vec3};
+use glam::{Affine3A, Mat3, Mat3A, Quat, Vec3, Vec3A};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -439,16 +439,18 @@ impl Deformer for CurveTool {
     fn deform(&self, bind: &CurveBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
         let p = bind.evaluator.degree();
         let stride = 2 * p + 1;
-        let moves: Vec<Vec3> = self
+        // In SIMD vectors (`Vec3A`, `Mat3A`): the same component-wise products and sums as
+        // `Vec3` and `Mat3`, so the same bits, a vector operation for three.
+        let moves: Vec<Vec3A> = self
             .deformed
             .iter()
             .zip(&self.rest)
-            .map(|(q, p)| *q - *p)
+            .map(|(q, p)| Vec3A::from(*q - *p))
             .collect();
-        let turns: Vec<Mat3> = self
+        let turns: Vec<Mat3A> = self
             .segment_rotations()
             .into_iter()
-            .map(|r| r - Mat3::IDENTITY)
+            .map(|r| Mat3A::from(r - Mat3::IDENTITY))
             .collect();
         for (o, &i) in out.iter_mut().zip(active) {
             let Some(&v) = bind.slot.get(i as usize).filter(|&&s| s != u32::MAX) else {
@@ -459,15 +461,16 @@ impl Deformer for CurveTool {
             let v = v as usize;
             let f = bind.firsts[v] as usize;
             let w = &bind.weights[v * stride..(v + 1) * stride];
-            let mut d = Vec3::ZERO;
+            let mut d = Vec3A::ZERO;
             for k in 0..=p {
                 d += moves[f + k] * w[k];
             }
-            let mut turn = Mat3::ZERO;
+            let mut turn = Mat3A::ZERO;
             for k in 0..p {
                 turn += turns[f + k] * w[p + 1 + k];
             }
-            *o = positions[i as usize] + d + turn * bind.offsets[v];
+            let x = Vec3A::from(positions[i as usize]);
+            *o = Vec3::from(x + d + turn * Vec3A::from(bind.offsets[v]));
         }
     }
 
@@ -661,6 +664,62 @@ pub(crate) mod tests {
                     .collect();
             }
             assert!((level[0] - *o).length() < 1e-4, "{x}: {} vs {o}", level[0]);
+        }
+    }
+
+    /// The deform in SIMD vectors (`Vec3A`, `Mat3A`) gives the bits of the same sums in
+    /// `Vec3` and `Mat3`, for a global and a local curve.
+    #[test]
+    fn simd_deform_has_the_bits_of_the_plain_vector_sums() {
+        let pts = cloud();
+        let topo = Topology {
+            weld: vec![],
+            representative: vec![],
+            triangles: vec![],
+        };
+        let every: Vec<u32> = (0..pts.len() as u32).collect();
+        for basis in [CurveBasis::Bezier, CurveBasis::BSpline { degree: 3 }] {
+            let mut tool = CurveTool::new(basis, straight(6, 3.0));
+            tool.deformed[3] += Vec3::new(0.1, 0.8, -0.3);
+            tool.deformed[5] += Vec3::new(-0.4, 0.2, 0.5);
+            let bind = tool
+                .bind(&BindInput {
+                    positions: &pts,
+                    topology: &topo,
+                    active: &every,
+                })
+                .unwrap();
+            let mut out = vec![Vec3::ZERO; pts.len()];
+            tool.deform(&bind, &pts, &every, &mut out);
+            let p = bind.evaluator.degree();
+            let moves: Vec<Vec3> = tool
+                .deformed
+                .iter()
+                .zip(&tool.rest)
+                .map(|(q, r)| *q - *r)
+                .collect();
+            let turns: Vec<Mat3> = tool
+                .segment_rotations()
+                .into_iter()
+                .map(|r| r - Mat3::IDENTITY)
+                .collect();
+            for (v, (x, o)) in pts.iter().zip(&out).enumerate() {
+                let (f, w) = (bind.firsts[v] as usize, &bind.weights[v * (2 * p + 1)..]);
+                let mut d = Vec3::ZERO;
+                for k in 0..=p {
+                    d += moves[f + k] * w[k];
+                }
+                let mut turn = Mat3::ZERO;
+                for k in 0..p {
+                    turn += turns[f + k] * w[p + 1 + k];
+                }
+                let expected = *x + d + turn * bind.offsets[v];
+                assert_eq!(
+                    o.to_array().map(f32::to_bits),
+                    expected.to_array().map(f32::to_bits),
+                    "{basis:?}, vertex {v}"
+                );
+            }
         }
     }
 

@@ -588,7 +588,11 @@ mod tests {
                 let (loaded, gathered) = (Lanes3::load(part), Lanes3::gather(&points, group));
                 for j in 0..LANES {
                     let k = j.min(len - 1);
-                    assert_eq!(loaded.lane(j), part[k], "load, {len} from {start}, lane {j}");
+                    assert_eq!(
+                        loaded.lane(j),
+                        part[k],
+                        "load, {len} from {start}, lane {j}"
+                    );
                     assert_eq!(
                         gathered.lane(j),
                         points[group[k] as usize],
