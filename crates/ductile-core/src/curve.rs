@@ -395,11 +395,18 @@ impl CurveTool {
                     });
                 let mut found = vec![(Closest::default(), 0.0); xs.len()];
                 pieces.closest_each(&xs, &mut found);
-                for ((&j, x), (c, _)) in fresh.iter().zip(xs).zip(found) {
+                let mut fresh_weights = vec![0.0; xs.len() * stride];
+                pieces.weights_each(&found, &mut fresh_weights);
+                for (((&j, x), (c, _)), w) in fresh
+                    .iter()
+                    .zip(xs)
+                    .zip(found)
+                    .zip(fresh_weights.chunks_exact(stride))
+                {
                     params[j] = c.t;
                     offsets[j] = x - c.point;
                     firsts[j] = pieces.first(c.piece) as u32;
-                    pieces.weights(c.piece, c.u, &mut weights[j * stride..(j + 1) * stride]);
+                    weights[j * stride..(j + 1) * stride].copy_from_slice(w);
                 }
             });
         Ok(CurveBind {

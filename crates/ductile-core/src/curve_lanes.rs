@@ -31,6 +31,24 @@ impl CurvePieces {
         });
     }
 
+    /// [`CurvePieces::weights`] of each closest point of `found`, written to `out` (`2p + 1`
+    /// values per point): the same bits, every function of a point at once.
+    ///
+    /// # Panics
+    /// When `out` does not hold `2p + 1` values per point.
+    pub fn weights_each(&self, found: &[(Closest, f32)], out: &mut [f32]) {
+        assert_eq!(
+            out.len(),
+            found.len() * (2 * self.degree + 1),
+            "2p + 1 weights per point"
+        );
+        pulp::Arch::new().dispatch(WeightsEach {
+            pieces: self,
+            found,
+            out,
+        });
+    }
+
     /// `(C(u), dC/du)` in each lane, on each lane's piece `k[j]` (Horner's rule, as
     /// [`CurvePieces::point_and_tangent`]).
     #[inline(always)]
@@ -180,6 +198,50 @@ impl pulp::WithSimd for ClosestEach<'_> {
     }
 }
 
+/// [`CurvePieces::weights_each`]'s kernel: one point at a time, its `2p + 1` basis functions
+/// in the lanes. Row `i` of the piece's table ([`CurvePieces::weight_rows`]) holds
+/// coefficient `i` of every function, so Horner's rule runs on all of them at once, from zero,
+/// `acc · u + cᵢ` as the scalar `horner` does. A segment function has one coefficient fewer:
+/// its lane starts with `0 · u + 0 = 0`, the scalar start (a NaN `u` gives NaN either way).
+/// A point at the curve's end takes the table of exact end weights, as the scalar form does;
+/// a degree too high for the lanes goes through the scalar form.
+struct WeightsEach<'a> {
+    pieces: &'a CurvePieces,
+    found: &'a [(Closest, f32)],
+    out: &'a mut [f32],
+}
+
+impl pulp::WithSimd for WeightsEach<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let pieces = self.pieces;
+        let p = pieces.degree;
+        let stride = 2 * p + 1;
+        for ((c, _), o) in self.found.iter().zip(self.out.chunks_exact_mut(stride)) {
+            let k = c.piece;
+            if pieces.weight_rows.is_empty() {
+                pieces.weights(k, c.u, o);
+                continue;
+            }
+            if c.u >= 1.0 && k + 1 == pieces.count {
+                o.copy_from_slice(&pieces.end);
+                continue;
+            }
+            let u = Lane::splat(c.u);
+            let mut acc = Lane::ZERO;
+            for &row in pieces.weight_rows[k * (p + 1)..(k + 1) * (p + 1)]
+                .iter()
+                .rev()
+            {
+                acc = acc * u + row;
+            }
+            o.copy_from_slice(&acc.as_array()[..stride]);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -243,6 +305,55 @@ mod tests {
         let folded = [Vec3::ZERO, Vec3::X, Vec3::X, Vec3::X, Vec3::ZERO];
         for basis in bases() {
             check(basis, &folded, &xs).unwrap();
+        }
+    }
+
+    /// The lane weights give every closest point the bits of [`CurvePieces::weights`], the
+    /// curve's end included.
+    #[test]
+    fn lane_weights_have_the_scalar_bits() {
+        let ctrl: Vec<Vec3> = (0..9)
+            .map(|i| {
+                let s = i as f32;
+                Vec3::new(s, (s * 1.7).sin() * 2.0, (s * 0.6).cos())
+            })
+            .collect();
+        // Points along the curve and past both ends (their closest points are the ends).
+        let xs: Vec<Vec3> = (0..1001)
+            .map(|i| {
+                let s = i as f32 * 0.011 - 1.5;
+                Vec3::new(s, (s * 1.7).sin() * 2.0 + 0.3, (s * 0.6).cos() - 0.2)
+            })
+            .collect();
+        // Five points (a quartic Bézier in the lanes) and nine (an octic one is too wide
+        // for them and goes through the scalar form).
+        for (n, basis) in [5, 9]
+            .into_iter()
+            .flat_map(|n| bases().into_iter().map(move |b| (n, b)))
+        {
+            let ctrl = &ctrl[..n];
+            let evaluator = CurveEvaluator::new(basis, ctrl.len(), "test").unwrap();
+            let pieces = CurvePieces::new(&evaluator, ctrl);
+            let stride = 2 * pieces.degree + 1;
+            let mut found = vec![(pieces.closest(Vec3::ZERO).0, 0.0); xs.len()];
+            pieces.closest_each(&xs, &mut found);
+            let mut lanes = vec![0.0; found.len() * stride];
+            pieces.weights_each(&found, &mut lanes);
+            let mut one = vec![0.0; stride];
+            for (g, group) in found.chunks(LANES).enumerate() {
+                for (j, (c, _)) in group.iter().enumerate() {
+                    let i = g * LANES + j;
+                    pieces.weights(c.piece, c.u, &mut one);
+                    assert_eq!(
+                        lanes[i * stride..(i + 1) * stride]
+                            .iter()
+                            .map(|w| w.to_bits())
+                            .collect::<Vec<_>>(),
+                        one.iter().map(|w| w.to_bits()).collect::<Vec<_>>(),
+                        "{basis:?}, point {i}"
+                    );
+                }
+            }
         }
     }
 

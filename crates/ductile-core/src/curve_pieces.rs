@@ -29,6 +29,7 @@ use glam::Vec3;
 use crate::basis::{basis_at_span, bernstein_all};
 use crate::curve::{CurveBasis, CurveEvaluator};
 use crate::frames::PolylineIndex;
+use crate::lane::{LANES, Lane};
 
 /// Pieces per control point (at least; a B-spline rounds up to whole knot spans).
 const PIECES_PER_POINT: usize = 16;
@@ -78,11 +79,15 @@ pub struct CurvePieces {
     point_basis: Vec<f32>,
     /// Per piece, `p` functions × `p` coefficients of the segment basis.
     segment_basis: Vec<f32>,
+    /// Per piece, `p + 1` rows: row `i` holds coefficient `i` of the `p + 1` point functions
+    /// and then of the `p` segment functions (0 where a segment function has none), for
+    /// evaluating them all at once (`curve_lanes.rs`); empty when `2p + 1` passes the lanes.
+    pub(crate) weight_rows: Vec<Lane>,
     /// Per piece, the index of its first non-zero point and segment function.
     firsts: Vec<u32>,
     /// The `2p + 1` weights at the curve's end `t = 1`, exactly as the recurrence gives them
     /// (every function but the last 0): the power form's sum there is only nearly 0.
-    end: Vec<f32>,
+    pub(crate) end: Vec<f32>,
     /// The piece boundaries `C(k/m)`, `k = 0..=m`.
     pub(crate) index: PolylineIndex,
 }
@@ -181,6 +186,25 @@ impl CurvePieces {
                 *e = *v as f32;
             }
         }
+        let mut weight_rows = Vec::new();
+        if 2 * p < LANES {
+            for k in 0..count {
+                let point = &point_basis[k * (p + 1) * (p + 1)..(k + 1) * (p + 1) * (p + 1)];
+                let segment = &segment_basis[k * p * p..(k + 1) * p * p];
+                for i in 0..=p {
+                    let mut row = Lane::ZERO;
+                    for (r, c) in point.chunks_exact(p + 1).enumerate() {
+                        row.0[r] = c[i];
+                    }
+                    if i < p {
+                        for (r, c) in segment.chunks_exact(p).enumerate() {
+                            row.0[p + 1 + r] = c[i];
+                        }
+                    }
+                    weight_rows.push(row);
+                }
+            }
+        }
         Self {
             degree: p,
             count,
@@ -188,6 +212,7 @@ impl CurvePieces {
             tangent,
             point_basis,
             segment_basis,
+            weight_rows,
             firsts,
             end,
             // At least two boundaries: the index always exists.
@@ -332,7 +357,7 @@ pub struct BasisPieces {
     /// Per piece, its first non-zero function.
     firsts: Vec<u32>,
     /// The `p + 1` values at `t = 1` exactly (every function but the last 0).
-    end: Vec<f32>,
+    pub(crate) end: Vec<f32>,
 }
 
 impl BasisPieces {
