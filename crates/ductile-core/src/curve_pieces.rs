@@ -24,7 +24,7 @@
 //! piece and are kept only while they bring the point closer — the search
 //! `docs/algorithms/curve-deformation.md` describes.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use crate::basis::{basis_at_span, bernstein_all};
 use crate::curve::{CurveBasis, CurveEvaluator};
@@ -358,6 +358,10 @@ pub struct BasisPieces {
     firsts: Vec<u32>,
     /// The `p + 1` values at `t = 1` exactly (every function but the last 0).
     pub(crate) end: Vec<f32>,
+    /// For a degree up to 3, per piece `p + 1` rows: row `i` holds coefficient `i` of every
+    /// function (0 past the last), so that Horner's rule runs on all of them in one SIMD
+    /// vector; empty for higher degrees.
+    rows: Vec<Vec4>,
 }
 
 impl BasisPieces {
@@ -394,12 +398,25 @@ impl BasisPieces {
         }
         let mut end = [0.0_f64; 17];
         basis(spans - 1)(1.0, &mut end);
+        let mut rows = Vec::new();
+        if p < 4 {
+            for piece in coeffs.chunks_exact(floats) {
+                for i in 0..=p {
+                    let mut row = [0.0; 4];
+                    for (r, c) in row.iter_mut().zip(piece.chunks_exact(p + 1)) {
+                        *r = c[i];
+                    }
+                    rows.push(Vec4::from_array(row));
+                }
+            }
+        }
         Some(Self {
             degree: p,
             count,
             coeffs,
             firsts,
             end: end[..=p].iter().map(|&v| v as f32).collect(),
+            rows,
         })
     }
 
@@ -422,8 +439,23 @@ impl BasisPieces {
         } else {
             (k, u)
         };
-        let c = &self.coeffs[k * (p + 1) * (p + 1)..(k + 1) * (p + 1) * (p + 1)];
         let m = self.count as f32;
+        if !self.rows.is_empty() {
+            // Every function at once, each lane doing the scalar loop's operations below.
+            let uu = Vec4::splat(u);
+            let (mut y, mut dy) = (Vec4::ZERO, Vec4::ZERO);
+            for &a in self.rows[k * (p + 1)..(k + 1) * (p + 1)].iter().rev() {
+                dy = dy * uu + y;
+                y = y * uu + a;
+            }
+            values[..=p].copy_from_slice(&y.to_array()[..=p]);
+            derivs[..=p].copy_from_slice(&(dy * m).to_array()[..=p]);
+            if t >= 1.0 {
+                values[..=p].copy_from_slice(&self.end);
+            }
+            return self.firsts[k] as usize;
+        }
+        let c = &self.coeffs[k * (p + 1) * (p + 1)..(k + 1) * (p + 1) * (p + 1)];
         for ((v, d), a) in values[..=p]
             .iter_mut()
             .zip(derivs[..=p].iter_mut())
@@ -661,6 +693,35 @@ mod tests {
                         );
                     }
                 }
+            }
+        }
+    }
+
+    /// Up to degree 3 the functions run in one SIMD vector: the bits of the scalar loop.
+    #[test]
+    fn basis_pieces_in_a_vector_have_the_scalar_bits() {
+        use crate::basis::KnotVector;
+        for (p, n) in [(1, 2), (2, 4), (3, 4), (3, 9)] {
+            let pieces = BasisPieces::new(&KnotVector::clamped_uniform(p, n).unwrap()).unwrap();
+            assert!(!pieces.rows.is_empty(), "p {p}: in a vector");
+            let mut scalar = pieces.clone();
+            scalar.rows.clear();
+            let (mut v, mut d, mut vs, mut ds) = ([0.0; 4], [0.0; 4], [0.0; 4], [0.0; 4]);
+            for s in -20..=1020 {
+                let t = s as f32 / 1000.0;
+                let first = pieces.values_and_derivatives(t, &mut v, &mut d);
+                let first_scalar = scalar.values_and_derivatives(t, &mut vs, &mut ds);
+                assert_eq!(first, first_scalar, "p {p} n {n} t {t}");
+                assert_eq!(
+                    v.map(f32::to_bits),
+                    vs.map(f32::to_bits),
+                    "p {p} n {n} t {t}: N"
+                );
+                assert_eq!(
+                    d.map(f32::to_bits),
+                    ds.map(f32::to_bits),
+                    "p {p} n {n} t {t}: N'"
+                );
             }
         }
     }
