@@ -357,7 +357,7 @@ pub struct BasisPieces {
     /// Per piece, its first non-zero function.
     firsts: Vec<u32>,
     /// The `p + 1` values at `t = 1` exactly (every function but the last 0).
-    pub(crate) end: Vec<f32>,
+    end: Vec<f32>,
     /// For a degree up to 3, per piece `p + 1` rows: row `i` holds coefficient `i` of every
     /// function (0 past the last), so that Horner's rule runs on all of them in one SIMD
     /// vector; empty for higher degrees.
