@@ -202,7 +202,8 @@ impl pulp::WithSimd for ClosestEach<'_> {
 /// in the lanes. Row `i` of the piece's table ([`CurvePieces::weight_rows`]) holds
 /// coefficient `i` of every function, so Horner's rule runs on all of them at once, from zero,
 /// `acc · u + cᵢ` as the scalar `horner` does. A segment function has one coefficient fewer:
-/// its lane starts with `0 · u + 0 = 0`, the scalar start (a NaN `u` gives NaN either way).
+/// its lane starts with `0 · u + 0 = +0`, the scalar start (a NaN or infinite `u` gives NaN
+/// either way).
 /// A point at the curve's end takes the table of exact end weights, as the scalar form does;
 /// a degree too high for the lanes goes through the scalar form.
 struct WeightsEach<'a> {
@@ -219,12 +220,14 @@ impl pulp::WithSimd for WeightsEach<'_> {
         let pieces = self.pieces;
         let p = pieces.degree;
         let stride = 2 * p + 1;
+        if pieces.weight_rows.is_empty() {
+            for ((c, _), o) in self.found.iter().zip(self.out.chunks_exact_mut(stride)) {
+                pieces.weights(c.piece, c.u, o);
+            }
+            return;
+        }
         for ((c, _), o) in self.found.iter().zip(self.out.chunks_exact_mut(stride)) {
             let k = c.piece;
-            if pieces.weight_rows.is_empty() {
-                pieces.weights(k, c.u, o);
-                continue;
-            }
             if c.u >= 1.0 && k + 1 == pieces.count {
                 o.copy_from_slice(&pieces.end);
                 continue;
@@ -325,18 +328,46 @@ mod tests {
                 Vec3::new(s, (s * 1.7).sin() * 2.0 + 0.3, (s * 0.6).cos() - 0.2)
             })
             .collect();
-        // Five points (a quartic Bézier in the lanes) and nine (an octic one is too wide
-        // for them and goes through the scalar form).
-        for (n, basis) in [5, 9]
+        // Five points (a quartic Bézier in the lanes), eight (degree 7, the widest that fits
+        // them) and nine (an octic Bézier is too wide and goes through the scalar form); with
+        // B-splines up to degree 7.
+        let wide = [4, 5, 7].map(|degree| CurveBasis::BSpline { degree });
+        for (n, basis) in [5, 8, 9]
             .into_iter()
-            .flat_map(|n| bases().into_iter().map(move |b| (n, b)))
+            .flat_map(|n| bases().into_iter().chain(wide).map(move |b| (n, b)))
         {
+            if let CurveBasis::BSpline { degree } = basis
+                && degree >= n
+            {
+                continue;
+            }
             let ctrl = &ctrl[..n];
             let evaluator = CurveEvaluator::new(basis, ctrl.len(), "test").unwrap();
             let pieces = CurvePieces::new(&evaluator, ctrl);
             let stride = 2 * pieces.degree + 1;
             let mut found = vec![(pieces.closest(Vec3::ZERO).0, 0.0); xs.len()];
             pieces.closest_each(&xs, &mut found);
+            // And parameters no search gives: an inner piece's end, signed zeros, values past
+            // the piece, infinities and NaN.
+            for piece in [0, pieces.count / 2, pieces.count - 1] {
+                for u in [
+                    1.0,
+                    0.0,
+                    -0.0,
+                    -0.5,
+                    1.5,
+                    f32::INFINITY,
+                    f32::NEG_INFINITY,
+                    f32::NAN,
+                ] {
+                    let c = Closest {
+                        piece,
+                        u,
+                        ..Closest::default()
+                    };
+                    found.push((c, 0.0));
+                }
+            }
             let mut lanes = vec![0.0; found.len() * stride];
             pieces.weights_each(&found, &mut lanes);
             let mut one = vec![0.0; stride];

@@ -36,7 +36,10 @@ const PIECES_PER_POINT: usize = 16;
 
 /// The most coefficients (`f32`) a piece table is meant to hold, 16 MiB: a B-spline of many
 /// control points and a high degree gets fewer pieces per knot span (at least 2, which
-/// keeps a degree-15 power form well conditioned at the clamped ends).
+/// keeps a degree-15 power form well conditioned at the clamped ends). The piece count is
+/// chosen from these tables alone; the transposed copies for evaluating a point's functions
+/// at once ([`CurvePieces::weight_rows`], [`BasisPieces::rows`]) come on top, at most about
+/// as much again, and live only as long as the pieces (during a bind).
 const TABLE_BUDGET: usize = 1 << 22;
 
 /// Pieces per knot span: [`PIECES_PER_POINT`] per control point, fewer where the table of
@@ -701,6 +704,9 @@ mod tests {
     #[test]
     fn basis_pieces_in_a_vector_have_the_scalar_bits() {
         use crate::basis::KnotVector;
+        // Degree 4 has more functions than a vector: no rows.
+        let quartic = BasisPieces::new(&KnotVector::clamped_uniform(4, 6).unwrap()).unwrap();
+        assert!(quartic.rows.is_empty());
         for (p, n) in [(1, 2), (2, 4), (3, 4), (3, 9)] {
             let pieces = BasisPieces::new(&KnotVector::clamped_uniform(p, n).unwrap()).unwrap();
             assert!(!pieces.rows.is_empty(), "p {p}: in a vector");
