@@ -282,14 +282,19 @@ mod tests {
         ]
     }
 
-    #[test]
-    fn lanes_give_the_scalar_bits_near_and_far_from_wiggly_curves() {
-        let ctrl: Vec<Vec3> = (0..9)
+    /// Nine control points of a curve that turns in every direction.
+    fn wiggly() -> Vec<Vec3> {
+        (0..9)
             .map(|i| {
                 let s = i as f32;
                 Vec3::new(s, (s * 1.7).sin() * 2.0, (s * 0.6).cos())
             })
-            .collect();
+            .collect()
+    }
+
+    #[test]
+    fn lanes_give_the_scalar_bits_near_and_far_from_wiggly_curves() {
+        let ctrl = wiggly();
         let xs: Vec<Vec3> = (0..3001)
             .map(|i| {
                 let s = i as f32 * 0.003;
@@ -315,12 +320,7 @@ mod tests {
     /// curve's end included.
     #[test]
     fn lane_weights_have_the_scalar_bits() {
-        let ctrl: Vec<Vec3> = (0..9)
-            .map(|i| {
-                let s = i as f32;
-                Vec3::new(s, (s * 1.7).sin() * 2.0, (s * 0.6).cos())
-            })
-            .collect();
+        let ctrl = wiggly();
         // Points along the curve and past both ends (their closest points are the ends).
         let xs: Vec<Vec3> = (0..1001)
             .map(|i| {
