@@ -72,6 +72,14 @@ use crate::resolve::resolve_area;
 /// the thread pool costs more there).
 const OUTPUT_FULL_DIVISOR: usize = 32;
 
+/// Above this fraction (`1 / OUTPUT_DENSE_DIVISOR`) of welded vertices that moved, every
+/// normal is computed again, as after a full evaluation (the same bits), rather than swept
+/// for: the sweeps' stamps and block flags then cost more than the work they skip. Measured
+/// on the head split 5×5 (221k vertices) with a Bézier curve layer bound again on the whole
+/// head (`rebind/bezier-curve` of the `authoring` bench): the output patch 7.5–10.9 →
+/// 3.7–5.1 ms.
+const OUTPUT_DENSE_DIVISOR: usize = 2;
+
 /// What one [`MeshEvaluator::update`] did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Update {
@@ -551,6 +559,31 @@ fn vertex_normal(v: u32, links: &Links, faces: &[Vec3]) -> Vec3 {
         acc += faces[t as usize];
     }
     acc.try_normalize().unwrap_or(Vec3::Z)
+}
+
+/// Every face normal into `faces` and every welded vertex's normal into `normals` (both
+/// resized to fit), in parallel: the face normals once, then each vertex's sum over its
+/// triangles in ascending order (the same additions as `smooth_normals`).
+fn all_normals(
+    links: &Links,
+    triangles: &[[u32; 3]],
+    positions: &[Vec3],
+    faces: &mut Vec<Vec3>,
+    normals: &mut Vec<Vec3>,
+) {
+    faces.resize(triangles.len(), Vec3::ZERO);
+    faces
+        .par_iter_mut()
+        .zip(triangles.par_iter())
+        .with_min_len(CHUNK)
+        .for_each(|(f, &t)| *f = face_normal(t, positions));
+    let faces = &*faces;
+    normals.resize(positions.len(), Vec3::ZERO);
+    normals
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(CHUNK)
+        .for_each(|(v, n)| *n = vertex_normal(v as u32, links, faces));
 }
 
 /// Every stored vertex `s` of `out` takes the welded position and normal of `weld[s]` (in
@@ -1101,6 +1134,27 @@ impl MeshEvaluator {
         };
         if faces.len() == triangles.len()
             && positions.len() >= PARALLEL_THRESHOLD
+            && candidates.len() * OUTPUT_DENSE_DIVISOR > positions.len()
+        {
+            let moved = candidates
+                .par_iter()
+                .with_min_len(CHUNK)
+                .filter(|&&v| differs(v))
+                .count();
+            if moved == 0 {
+                return false;
+            }
+            if moved * OUTPUT_DENSE_DIVISOR > positions.len() {
+                // Most vertices moved: every normal again (as after a full evaluation),
+                // without the sweeps' stamps and block flags.
+                let normals = &mut self.normals;
+                all_normals(links, triangles, positions, faces, normals);
+                write_stored(out, &topology.weld, positions, normals);
+                return true;
+            }
+        }
+        if faces.len() == triangles.len()
+            && positions.len() >= PARALLEL_THRESHOLD
             && candidates.len() * OUTPUT_FULL_DIVISOR > positions.len()
         {
             // Many candidates: sweeps in order (and in parallel) instead of following each
@@ -1192,20 +1246,8 @@ impl MeshEvaluator {
             // then scattered to the stored copies.
             // (Both buffers are kept between updates: fresh ones of this size would cost
             // a page fault every 4 KiB.)
-            faces.resize(triangles.len(), Vec3::ZERO);
-            faces
-                .par_iter_mut()
-                .zip(triangles.par_iter())
-                .with_min_len(CHUNK)
-                .for_each(|(f, &t)| *f = face_normal(t, positions));
-            let faces = &*faces;
             let normals = &mut self.normals;
-            normals.resize(positions.len(), Vec3::ZERO);
-            normals
-                .par_iter_mut()
-                .enumerate()
-                .with_min_len(CHUNK)
-                .for_each(|(v, n)| *n = vertex_normal(v as u32, links, faces));
+            all_normals(links, triangles, positions, faces, normals);
             write_stored(out, &topology.weld, positions, normals);
             return true;
         }
