@@ -72,9 +72,11 @@ use crate::resolve::resolve_area;
 /// the thread pool costs more there).
 const OUTPUT_FULL_DIVISOR: usize = 32;
 
-/// Above this fraction (`1 / OUTPUT_DENSE_DIVISOR`) of welded vertices that moved, every
-/// normal is computed again, as after a full evaluation (the same bits), rather than swept
-/// for: the sweeps' stamps and block flags then cost more than the work they skip. Measured
+/// On a mesh of [`PARALLEL_THRESHOLD`] vertices or more with a valid face cache, when more
+/// than this fraction (`1 / OUTPUT_DENSE_DIVISOR`) of the welded vertices are candidates and
+/// a parallel count finds more than that fraction moved, every normal is computed again, as
+/// after a full evaluation (the same bits), rather than swept for: the sweeps' stamps and
+/// block flags then cost more than the work they skip. Measured
 /// on the head split 5×5 (221k vertices) with a Bézier curve layer bound again on the whole
 /// head (`rebind/bezier-curve` of the `authoring` bench): the output patch 7.5–10.9 →
 /// 3.7–5.1 ms.

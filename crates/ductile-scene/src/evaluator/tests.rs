@@ -922,10 +922,12 @@ fn layers_above_a_change_are_refreshed_on_the_moved_vertices() {
     );
 }
 
-/// Edits that move more than half of a mesh above the parallel threshold recompute every
-/// normal, those that move more than 1/32 of it take the block sweeps of the output patch,
-/// smaller ones follow each moved vertex; all three, one after the other, must give a fresh
-/// evaluation's bits (the lattices move 61 %, 23 % and 1.5 % of the vertices). The mesh has a seam (stored copies) and a
+/// On a mesh above the parallel threshold, an edit that moves more than half of the vertices
+/// recomputes every normal, one with more than 1/32 of them as candidates takes the block
+/// sweeps of the output patch, and a smaller one follows each moved vertex. All three, one
+/// after the other, must give a fresh evaluation's bits. The lattices move 61 %, 23 % and
+/// 1.5 % of the vertices; the first edit of the widest follows the full evaluation (no face
+/// cache yet), its later ones take the dense path. The mesh has a seam (stored copies) and a
 /// vertex in no triangle inside the lattice, whose block holds nothing else that moves.
 #[test]
 fn large_edits_patch_the_output_in_blocks_exactly() {
