@@ -76,10 +76,9 @@ const OUTPUT_FULL_DIVISOR: usize = 32;
 /// than this fraction (`1 / OUTPUT_DENSE_DIVISOR`) of the welded vertices are candidates and
 /// a parallel count finds more than that fraction moved, every normal is computed again, as
 /// after a full evaluation (the same bits), rather than swept for: the sweeps' stamps and
-/// block flags then cost more than the work they skip. Measured
-/// on the head split 5×5 (221k vertices) with a Bézier curve layer bound again on the whole
-/// head (`rebind/bezier-curve` of the `authoring` bench): the output patch 7.5–10.9 →
-/// 3.7–5.1 ms.
+/// block flags then cost more than the work they skip. Measured on the head split 5×5 (221k
+/// vertices) with a Bézier curve layer bound again on the whole head (`rebind/bezier-curve`
+/// of the `authoring` bench): the output patch 7.5–10.9 → 3.7–5.1 ms.
 const OUTPUT_DENSE_DIVISOR: usize = 2;
 
 /// What one [`MeshEvaluator::update`] did.
@@ -563,16 +562,19 @@ fn vertex_normal(v: u32, links: &Links, faces: &[Vec3]) -> Vec3 {
     acc.try_normalize().unwrap_or(Vec3::Z)
 }
 
-/// Every face normal into `faces` and every welded vertex's normal into `normals` (both
-/// resized to fit), in parallel: the face normals once, then each vertex's sum over its
-/// triangles in ascending order (the same additions as `smooth_normals`).
-fn all_normals(
+/// The whole output again, in parallel: every face normal into `faces` and every welded
+/// vertex's normal into `normals` (both resized to fit) — the face normals once, then each
+/// vertex's sum over its triangles in ascending order (the same additions as
+/// `smooth_normals`) — then every stored vertex of `out` (see [`write_stored`]).
+fn rewrite_all(
+    out: &mut Deformed,
+    topology: &Topology,
     links: &Links,
-    triangles: &[[u32; 3]],
     positions: &[Vec3],
     faces: &mut Vec<Vec3>,
     normals: &mut Vec<Vec3>,
 ) {
+    let triangles = &topology.triangles;
     faces.resize(triangles.len(), Vec3::ZERO);
     faces
         .par_iter_mut()
@@ -586,6 +588,7 @@ fn all_normals(
         .enumerate()
         .with_min_len(CHUNK)
         .for_each(|(v, n)| *n = vertex_normal(v as u32, links, faces));
+    write_stored(out, &topology.weld, positions, normals);
 }
 
 /// Every stored vertex `s` of `out` takes the welded position and normal of `weld[s]` (in
@@ -1134,10 +1137,9 @@ impl MeshEvaluator {
             let s = topology.representative[v as usize] as usize;
             !same_bits(positions[v as usize], out.positions[s])
         };
-        if faces.len() == triangles.len()
-            && positions.len() >= PARALLEL_THRESHOLD
-            && candidates.len() * OUTPUT_DENSE_DIVISOR > positions.len()
-        {
+        // The block sweeps and the dense path read and keep the face cache, on big meshes.
+        let sweepable = faces.len() == triangles.len() && positions.len() >= PARALLEL_THRESHOLD;
+        if sweepable && candidates.len() * OUTPUT_DENSE_DIVISOR > positions.len() {
             let moved = candidates
                 .par_iter()
                 .with_min_len(CHUNK)
@@ -1149,16 +1151,11 @@ impl MeshEvaluator {
             if moved * OUTPUT_DENSE_DIVISOR > positions.len() {
                 // Most vertices moved: every normal again (as after a full evaluation),
                 // without the sweeps' stamps and block flags.
-                let normals = &mut self.normals;
-                all_normals(links, triangles, positions, faces, normals);
-                write_stored(out, &topology.weld, positions, normals);
+                rewrite_all(out, topology, links, positions, faces, &mut self.normals);
                 return true;
             }
         }
-        if faces.len() == triangles.len()
-            && positions.len() >= PARALLEL_THRESHOLD
-            && candidates.len() * OUTPUT_FULL_DIVISOR > positions.len()
-        {
+        if sweepable && candidates.len() * OUTPUT_FULL_DIVISOR > positions.len() {
             // Many candidates: sweeps in order (and in parallel) instead of following each
             // moved vertex, over the blocks that hold something that changed. One parallel
             // pass keeps the candidates that moved, stamps them and flags the blocks of their
@@ -1243,14 +1240,9 @@ impl MeshEvaluator {
             return false;
         }
         if faces.len() != triangles.len() {
-            // Every normal: the face normals once, then each vertex's sum over its triangles
-            // in ascending order (the same additions as `smooth_normals`), in parallel;
-            // then scattered to the stored copies.
-            // (Both buffers are kept between updates: fresh ones of this size would cost
-            // a page fault every 4 KiB.)
-            let normals = &mut self.normals;
-            all_normals(links, triangles, positions, faces, normals);
-            write_stored(out, &topology.weld, positions, normals);
+            // No face cache yet: every normal. (Both buffers are kept between updates: fresh
+            // ones of this size would cost a page fault every 4 KiB.)
+            rewrite_all(out, topology, links, positions, faces, &mut self.normals);
             return true;
         }
         // The triangles around the moved vertices get new face normals (the others keep
