@@ -106,6 +106,13 @@ fn corrupt_gltf_files_are_errors_not_panics() {
     );
     let e = load_corrupted("\"version\": \"2.0\"", "\"version\": 2", "");
     assert!(e.contains("invalid glTF"), "{e}");
+    // A problem the decoder's validation finds is named once, with its JSON path.
+    let e = load_corrupted("\"componentType\": 5126", "\"componentType\": 7", "");
+    assert_eq!(e.matches("invalid glTF").count(), 1, "{e}");
+    assert!(
+        e.contains("invalid glTF: accessors[0].componentType: Invalid value"),
+        "{e}"
+    );
 }
 
 #[test]

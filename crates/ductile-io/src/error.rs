@@ -76,7 +76,7 @@ pub enum IoError {
         expected: &'static str,
     },
     /// The glTF file could not be decoded.
-    #[error("{}: invalid glTF: {source}", path.display())]
+    #[error("{}: invalid glTF: {}", path.display(), gltf_problem(source))]
     Gltf {
         /// The file.
         path: PathBuf,
@@ -287,6 +287,20 @@ pub enum IoError {
 
 /// The scene format versions this build reads.
 pub const SUPPORTED_VERSIONS: &[u64] = &[1, 2];
+
+/// The decoder's message without its own "invalid glTF:" prefix (which its validation errors
+/// carry and the others do not), so that the message says it once: each validation problem
+/// as `path: problem`, separated by semicolons.
+fn gltf_problem(error: &gltf::Error) -> String {
+    match error {
+        gltf::Error::Validation(problems) => problems
+            .iter()
+            .map(|(path, problem)| format!("{path}: {problem}"))
+            .collect::<Vec<_>>()
+            .join("; "),
+        other => other.to_string(),
+    }
+}
 
 fn list(versions: &[u64]) -> String {
     versions
