@@ -565,7 +565,9 @@ fn vertex_normal(v: u32, links: &Links, faces: &[Vec3]) -> Vec3 {
 /// The whole output again, in parallel: every face normal into `faces` and every welded
 /// vertex's normal into `normals` (both resized to fit) — the face normals once, then each
 /// vertex's sum over its triangles in ascending order (the same additions as
-/// `smooth_normals`) — then every stored vertex of `out` (see [`write_stored`]).
+/// `smooth_normals`) — then every stored vertex of `out` (see [`write_stored`]). The caller
+/// keeps both buffers between updates: fresh ones of this size would cost a page fault every
+/// 4 KiB.
 fn rewrite_all(
     out: &mut Deformed,
     topology: &Topology,
@@ -1240,8 +1242,7 @@ impl MeshEvaluator {
             return false;
         }
         if faces.len() != triangles.len() {
-            // No face cache yet: every normal. (Both buffers are kept between updates: fresh
-            // ones of this size would cost a page fault every 4 KiB.)
+            // No face cache yet: every normal.
             rewrite_all(out, topology, links, positions, faces, &mut self.normals);
             return true;
         }
