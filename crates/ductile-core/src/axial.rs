@@ -305,11 +305,11 @@ impl AxialTool {
         let m = active.len();
         let mut bind = AxialBind {
             slot,
-            segment: vec![0; m],
-            fraction: vec![0.0; m],
+            segment: zeroed(m),
+            fraction: zeroed(m),
             local: zeroed(m),
             base: zeroed(m),
-            weight: vec![0.0; m],
+            weight: zeroed(m),
             rest,
         };
         let index =

@@ -21,13 +21,27 @@ pub const PARALLEL_COPY_THRESHOLD: usize = 1 << 17;
 /// shape surfaces).
 pub const BIND_CHUNK: usize = 4096;
 
-/// `n` zeros of a plain type from zeroed memory (`calloc`). Unlike `vec![v; n]` of a struct,
-/// which writes every element on the calling thread, nothing is written now: the pages are
-/// first touched, and zeroed by the system, by the threads that fill the vector in parallel
-/// chunks.
+/// From this many bytes on, [`zeroed`] writes its zeros in parallel chunks.
+pub const PARALLEL_ZERO_BYTES: usize = 1 << 21;
+
+/// `n` zeros of a plain type. From [`PARALLEL_ZERO_BYTES`] on, the zeros are written in
+/// parallel chunks: `calloc` (what `vec![0.0; n]` and `bytemuck::zeroed_vec` call) writes them
+/// on the calling thread with `memset` whenever the allocator reuses memory it already holds,
+/// which in an evaluation (one layer's buffers freed, the next layer's allocated) is the
+/// usual case; a million-vertex stack zeroes a few hundred megabytes of bind and deform
+/// buffers. Below it, `calloc`: a smaller `memset` costs less than waking the pool.
 #[must_use]
-pub fn zeroed<T: bytemuck::Zeroable>(n: usize) -> Vec<T> {
-    bytemuck::zeroed_vec(n)
+pub fn zeroed<T: bytemuck::Zeroable + Copy + Send + Sync>(n: usize) -> Vec<T> {
+    if n.saturating_mul(size_of::<T>()) < PARALLEL_ZERO_BYTES {
+        return bytemuck::zeroed_vec(n);
+    }
+    let mut v = Vec::with_capacity(n);
+    (0..n)
+        .into_par_iter()
+        .with_min_len(CHUNK)
+        .map(|_| T::zeroed())
+        .collect_into_vec(&mut v);
+    v
 }
 
 /// The slots of a compact per-vertex bind of `n` vertices: `slot[v]` is the position of
@@ -245,6 +259,24 @@ pub fn gather_at<T: Copy + Send + Sync>(values: &[T], indices: &[u32]) -> Vec<T>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn zeroed_is_all_zeros_on_both_paths_even_in_reused_memory() {
+        for n in [
+            0,
+            5,
+            PARALLEL_ZERO_BYTES / 4 - 1,
+            PARALLEL_ZERO_BYTES / 4 + 4_099,
+        ] {
+            // Memory the allocator may hand back: written, then freed.
+            drop(vec![1.5_f32; n]);
+            let v: Vec<f32> = zeroed(n);
+            assert_eq!(v.len(), n);
+            assert!(v.iter().all(|x| x.to_bits() == 0), "{n} zeros");
+            let w: Vec<glam::Vec3> = zeroed(n);
+            assert!(w.len() == n && w.iter().all(|x| *x == glam::Vec3::ZERO));
+        }
+    }
 
     #[test]
     fn bind_slots_number_each_active_vertex_in_range_once() {

@@ -371,10 +371,10 @@ impl CurveTool {
         let (slot, active) = bind_slots(input.positions.len(), input.active);
         let m = active.len();
         let stride = 2 * evaluator.degree() + 1;
-        let mut params = vec![0.0; m];
+        let mut params = zeroed(m);
         let mut offsets = zeroed(m);
-        let mut firsts = vec![0; m];
-        let mut weights = vec![0.0; m * stride];
+        let mut firsts = zeroed(m);
+        let mut weights = zeroed(m * stride);
         let previous = previous.filter(|p| p.bind.evaluator.degree() == evaluator.degree());
         // Every vertex on its own, in parallel chunks (the same bits as one by one): the
         // closest points of a chunk's vertices that are not reused, a lane group at a time.

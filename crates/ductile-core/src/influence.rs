@@ -14,7 +14,7 @@ use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::chunks::{CHUNK, PARALLEL_THRESHOLD};
+use crate::chunks::{CHUNK, PARALLEL_THRESHOLD, zeroed};
 use crate::error::{CoreError, Result, check_finite};
 use crate::spline::SplineControl;
 use crate::volume_lanes::{Ids, LaneInfluence};
@@ -594,8 +594,8 @@ fn gather_lanes(
 fn join(parts: &[Mask]) -> Mask {
     let len = parts.iter().map(Mask::len).sum();
     let mut mask = Mask {
-        indices: vec![0; len],
-        weights: vec![0.0; len],
+        indices: zeroed(len),
+        weights: zeroed(len),
     };
     let mut jobs = Vec::with_capacity(parts.len());
     let (mut indices, mut weights) = (&mut mask.indices[..], &mut mask.weights[..]);

@@ -11,7 +11,9 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 
+use crate::chunks::{CHUNK, PARALLEL_COPY_THRESHOLD};
 use crate::error::{CoreError, Result};
 use crate::normals::smooth_normals;
 use crate::refinement::RefinedMesh;
@@ -191,10 +193,20 @@ impl Topology {
             .collect()
     }
 
-    /// Scatters welded values back to every stored copy, in the original vertex order.
+    /// Scatters welded values back to every stored copy, in the original vertex order (in
+    /// parallel chunks from [`PARALLEL_COPY_THRESHOLD`] stored vertices on).
     #[must_use]
-    pub fn scatter<T: Copy>(&self, welded: &[T]) -> Vec<T> {
-        self.weld.iter().map(|&w| welded[w as usize]).collect()
+    pub fn scatter<T: Copy + Send + Sync>(&self, welded: &[T]) -> Vec<T> {
+        if self.weld.len() < PARALLEL_COPY_THRESHOLD {
+            return self.weld.iter().map(|&w| welded[w as usize]).collect();
+        }
+        let mut stored = Vec::with_capacity(self.weld.len());
+        self.weld
+            .par_iter()
+            .with_min_len(CHUNK)
+            .map(|&w| welded[w as usize])
+            .collect_into_vec(&mut stored);
+        stored
     }
 
     /// Vertex-to-vertex adjacency (each welded vertex's neighbours over triangle edges),
@@ -364,6 +376,22 @@ mod tests {
         assert_eq!(topo.triangles, vec![[0, 1, 2], [1, 3, 2]]);
         let stored = topo.scatter(&[10, 11, 12, 13]);
         assert_eq!(stored, vec![10, 11, 12, 11, 13, 12]);
+    }
+
+    #[test]
+    fn scatter_in_parallel_chunks_gives_every_stored_copy_its_value() {
+        let welded: Vec<u32> = (0..50_000).map(|i| i * 3 + 1).collect();
+        let n = PARALLEL_COPY_THRESHOLD + 4_097;
+        let topo = Topology {
+            weld: (0..n).map(|s| (s * 7_919 % 50_000) as u32).collect(),
+            representative: Vec::new(),
+            triangles: Vec::new(),
+        };
+        let stored = topo.scatter(&welded);
+        assert_eq!(stored.len(), n);
+        for (s, v) in stored.iter().enumerate() {
+            assert_eq!(*v, welded[s * 7_919 % 50_000], "stored vertex {s}");
+        }
     }
 
     #[test]

@@ -490,8 +490,8 @@ impl ShapeSurfaceTool {
         let m = active.len();
         let stride = 2 * (pu + 1) + 2 * (pv + 1);
         let mut points: Vec<Bound> = zeroed(m);
-        let mut weights = vec![0.0; m * stride];
-        let mut projects = vec![false; m];
+        let mut weights = zeroed(m * stride);
+        let mut projects = zeroed(m);
         let previous = previous.filter(|p| p.bind.knots == knots);
         points
             .par_iter_mut()
