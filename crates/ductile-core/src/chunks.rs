@@ -29,7 +29,8 @@ pub const PARALLEL_ZERO_BYTES: usize = 1 << 21;
 /// on the calling thread with `memset` whenever the allocator reuses memory it already holds,
 /// which in an evaluation (one layer's buffers freed, the next layer's allocated) is the
 /// usual case; a million-vertex stack zeroes a few hundred megabytes of bind and deform
-/// buffers. Below it, `calloc`: a smaller `memset` costs less than waking the pool.
+/// buffers. Below it, `calloc`: a `memset` of 2 MiB takes about as long as waking a sleeping
+/// pool thread (150–300 µs on the project's VM, `docs/performance.md`).
 #[must_use]
 pub fn zeroed<T: bytemuck::Zeroable + Copy + Send + Sync>(n: usize) -> Vec<T> {
     if n.saturating_mul(size_of::<T>()) < PARALLEL_ZERO_BYTES {
