@@ -18,9 +18,9 @@ mod common;
 
 /// Normal dependencies `ductile-core` may have: math, serialisation, errors, parallelism, and
 /// the numeric/graph crates its solvers use (faer for linear algebra, petgraph for the
-/// sketch tool's minimum cut, wide for the FFSD kernel's SIMD lanes, pulp to pick the SIMD
-/// width of the Bernstein lattice kernel when the program runs), and bytemuck for zeroed
-/// allocations of plain vectors.
+/// sketch tool's minimum cut, pulp to pick the SIMD width of the lane kernels when the
+/// program runs), and bytemuck for zeroed allocations of plain vectors. (`wide` is only a
+/// dev-dependency: the oracle of the lanes' exp and ln.)
 const CORE_ALLOWED: &[&str] = &[
     "glam",
     "serde",
@@ -28,7 +28,6 @@ const CORE_ALLOWED: &[&str] = &[
     "rayon",
     "faer",
     "petgraph",
-    "wide",
     "pulp",
     "bytemuck",
 ];
