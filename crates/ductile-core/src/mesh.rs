@@ -11,9 +11,8 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
-use rayon::prelude::*;
 
-use crate::chunks::{CHUNK, PARALLEL_COPY_THRESHOLD};
+use crate::chunks::gather_at;
 use crate::error::{CoreError, Result};
 use crate::normals::smooth_normals;
 use crate::refinement::RefinedMesh;
@@ -193,20 +192,12 @@ impl Topology {
             .collect()
     }
 
-    /// Scatters welded values back to every stored copy, in the original vertex order (in
-    /// parallel chunks from [`PARALLEL_COPY_THRESHOLD`] stored vertices on).
+    /// Scatters welded values back to every stored copy, in the original vertex order: each
+    /// stored vertex gathers its welded value ([`gather_at`], in parallel chunks for large
+    /// meshes).
     #[must_use]
     pub fn scatter<T: Copy + Send + Sync>(&self, welded: &[T]) -> Vec<T> {
-        if self.weld.len() < PARALLEL_COPY_THRESHOLD {
-            return self.weld.iter().map(|&w| welded[w as usize]).collect();
-        }
-        let mut stored = Vec::with_capacity(self.weld.len());
-        self.weld
-            .par_iter()
-            .with_min_len(CHUNK)
-            .map(|&w| welded[w as usize])
-            .collect_into_vec(&mut stored);
-        stored
+        gather_at(welded, &self.weld)
     }
 
     /// Vertex-to-vertex adjacency (each welded vertex's neighbours over triangle edges),
@@ -350,6 +341,7 @@ impl Deformed {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::chunks::PARALLEL_COPY_THRESHOLD;
 
     /// Two triangles forming a quad, with the shared edge stored twice (a UV seam).
     fn seam_quad() -> Mesh {
