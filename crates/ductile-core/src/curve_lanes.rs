@@ -103,8 +103,8 @@ impl CurvePieces {
             let above = next.simd_gt(one);
             let kn = below.select(k - back, above.select(k + ahead, k));
             let un = below.select(
-                clamp01(next + back),
-                above.select(clamp01(next - ahead), next),
+                (next + back).clamp01(),
+                above.select((next - ahead).clamp01(), next),
             );
             let (kn, un) = self.settled_lanes(kn, un);
             let (cn, dn) = self.point_and_tangent_lanes(&indices(kn, self.count), un);
@@ -150,14 +150,6 @@ fn gather(table: &[Vec3], k: &[usize; LANES], same: bool, stride: usize, i: usiz
 #[inline(always)]
 fn dot(a: Lanes3, b: Lanes3) -> Lane {
     a.x * b.x + a.y * b.y + a.z * b.z
-}
-
-/// `f32::clamp(0, 1)` in each lane (NaN kept).
-#[inline(always)]
-fn clamp01(q: Lane) -> Lane {
-    let (zero, one) = (Lane::ZERO, Lane::splat(1.0));
-    let q = q.simd_lt(zero).select(zero, q);
-    q.simd_gt(one).select(one, q)
 }
 
 /// [`CurvePieces::closest_each`]'s kernel.

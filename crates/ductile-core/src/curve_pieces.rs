@@ -423,6 +423,48 @@ impl BasisPieces {
         })
     }
 
+    /// The piece of `t` clamped to `[0, 1]`, its local parameter `u ∈ [0, 1]` and the
+    /// clamped `t`. The end of an inner piece is the start of the next (a knot belongs to the
+    /// span after it, as in `KnotVector::span`).
+    #[inline(always)]
+    fn piece_of(&self, t: f32) -> (usize, f32, f32) {
+        let t = t.clamp(0.0, 1.0);
+        let scaled = t * self.count as f32;
+        let k = (scaled as usize).min(self.count - 1);
+        let u = (scaled - k as f32).clamp(0.0, 1.0);
+        if u >= 1.0 && k + 1 < self.count {
+            (k + 1, 0.0, t)
+        } else {
+            (k, u, t)
+        }
+    }
+
+    /// For a degree up to 3, [`BasisPieces::values_and_derivatives`] in the lanes of two
+    /// vectors (lanes past `p` are 0) with the index of the first function; `None` for a
+    /// higher degree.
+    #[inline(always)]
+    #[must_use]
+    pub fn values_and_derivatives4(&self, t: f32) -> Option<(usize, Vec4, Vec4)> {
+        if self.rows.is_empty() {
+            return None;
+        }
+        let p = self.degree;
+        let (k, u, t) = self.piece_of(t);
+        // Every function at once, each lane doing the scalar loop's operations below.
+        let uu = Vec4::splat(u);
+        let (mut y, mut dy) = (Vec4::ZERO, Vec4::ZERO);
+        for &a in self.rows[k * (p + 1)..(k + 1) * (p + 1)].iter().rev() {
+            dy = dy * uu + y;
+            y = y * uu + a;
+        }
+        if t >= 1.0 {
+            let mut end = [0.0; 4];
+            end[..=p].copy_from_slice(&self.end);
+            y = Vec4::from_array(end);
+        }
+        Some((self.firsts[k] as usize, y, dy * self.count as f32))
+    }
+
     /// The `p + 1` non-zero functions at `t` (clamped to `[0, 1]`) and their derivatives
     /// with respect to `t`, written to `values[..=p]` and `derivs[..=p]`; returns the index
     /// of the first.
@@ -431,33 +473,13 @@ impl BasisPieces {
     /// When `values` or `derivs` is shorter than `p + 1`.
     pub fn values_and_derivatives(&self, t: f32, values: &mut [f32], derivs: &mut [f32]) -> usize {
         let p = self.degree;
-        let t = t.clamp(0.0, 1.0);
-        let scaled = t * self.count as f32;
-        let k = (scaled as usize).min(self.count - 1);
-        let u = (scaled - k as f32).clamp(0.0, 1.0);
-        // The end of an inner piece is the start of the next (a knot belongs to the span
-        // after it, as in `KnotVector::span`).
-        let (k, u) = if u >= 1.0 && k + 1 < self.count {
-            (k + 1, 0.0)
-        } else {
-            (k, u)
-        };
-        let m = self.count as f32;
-        if !self.rows.is_empty() {
-            // Every function at once, each lane doing the scalar loop's operations below.
-            let uu = Vec4::splat(u);
-            let (mut y, mut dy) = (Vec4::ZERO, Vec4::ZERO);
-            for &a in self.rows[k * (p + 1)..(k + 1) * (p + 1)].iter().rev() {
-                dy = dy * uu + y;
-                y = y * uu + a;
-            }
-            values[..=p].copy_from_slice(&y.to_array()[..=p]);
-            derivs[..=p].copy_from_slice(&(dy * m).to_array()[..=p]);
-            if t >= 1.0 {
-                values[..=p].copy_from_slice(&self.end);
-            }
-            return self.firsts[k] as usize;
+        if let Some((first, y, dy)) = self.values_and_derivatives4(t) {
+            put4(&mut values[..=p], y);
+            put4(&mut derivs[..=p], dy);
+            return first;
         }
+        let (k, u, t) = self.piece_of(t);
+        let m = self.count as f32;
         let c = &self.coeffs[k * (p + 1) * (p + 1)..(k + 1) * (p + 1) * (p + 1)];
         for ((v, d), a) in values[..=p]
             .iter_mut()
@@ -477,6 +499,20 @@ impl BasisPieces {
             values[..=p].copy_from_slice(&self.end);
         }
         self.firsts[k] as usize
+    }
+}
+
+/// The first `out.len()` (at most 4) lanes of `v` into `out`, as fixed-size stores (a
+/// copy of a run-time length would call `memcpy`).
+#[inline(always)]
+pub(crate) fn put4(out: &mut [f32], v: Vec4) {
+    let a = v.to_array();
+    match out.len() {
+        4 => out.copy_from_slice(&a),
+        3 => out.copy_from_slice(&a[..3]),
+        2 => out.copy_from_slice(&a[..2]),
+        1 => out[0] = a[0],
+        n => out.copy_from_slice(&a[..n]),
     }
 }
 

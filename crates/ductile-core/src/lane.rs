@@ -149,6 +149,15 @@ impl Lane {
         Self(each!(|i| self.0[i].sqrt()))
     }
 
+    /// `f32::clamp(0, 1)` in each lane: 0 below, 1 above, NaN kept.
+    #[inline(always)]
+    #[must_use]
+    pub(crate) fn clamp01(self) -> Self {
+        let (zero, one) = (Self::ZERO, Self::splat(1.0));
+        let q = self.simd_lt(zero).select(zero, self);
+        q.simd_gt(one).select(one, q)
+    }
+
     /// The lesser lane, as SSE's `minps` after a NaN test of `o` (the `wide` crate's
     /// `min`): `self` where `o` is NaN, else `self < o ? self : o`.
     #[inline(always)]

@@ -32,6 +32,7 @@ pub mod sketch;
 pub mod spline;
 pub mod stack;
 pub mod surface;
+mod surface_lanes;
 pub mod tool;
 mod volume_lanes;
 

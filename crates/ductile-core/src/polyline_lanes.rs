@@ -117,7 +117,7 @@ impl PolylineIndex {
         let block = &self.lanes[b];
         let first = b * BLOCK;
         let len = (self.segments - first).min(BLOCK);
-        let (zero, one) = (Lane::ZERO, Lane::splat(1.0));
+        let zero = Lane::ZERO;
         for i in 0..len {
             let (px, py, pz) = (
                 Lane::splat(block.p[0][i]),
@@ -133,9 +133,7 @@ impl PolylineIndex {
             let f = if l2 > 0.0 {
                 let dot = (x.x - px) * dx + (x.y - py) * dy + (x.z - pz) * dz;
                 // `f32::clamp(0, 1)`, NaN kept.
-                let q = dot / Lane::splat(l2);
-                let q = q.simd_lt(zero).select(zero, q);
-                q.simd_gt(one).select(one, q)
+                (dot / Lane::splat(l2)).clamp01()
             } else {
                 zero
             };

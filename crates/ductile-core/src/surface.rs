@@ -20,8 +20,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE};
 use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots, zeroed};
-use crate::curve_pieces::BasisPieces;
+use crate::curve_pieces::{BasisPieces, put4};
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
+use crate::surface_lanes::PlanarProjection;
 use crate::tool::{BindInput, Deformer};
 
 /// The rest plane of a shape surface: `origin + a·u_edge + b·v_edge`, `(a, b) ∈ [0, 1]²`.
@@ -215,6 +216,20 @@ fn piece_bases_into(
     out: &mut [f32],
 ) -> (usize, usize) {
     let (pu, pv) = (kv[0].degree(), kv[1].degree());
+    // Degrees up to 3: each direction's values and derivatives in two vectors, stored at once.
+    if let [Some(a), Some(b)] = pieces
+        && let (Some((first_u, nu, du)), Some((first_v, nv, dv))) =
+            (a.values_and_derivatives4(u), b.values_and_derivatives4(v))
+    {
+        let (out_nu, rest) = out.split_at_mut(pu + 1);
+        let (out_du, rest) = rest.split_at_mut(pu + 1);
+        let (out_nv, out_dv) = rest.split_at_mut(pv + 1);
+        put4(out_nu, nu);
+        put4(out_du, du);
+        put4(out_nv, nv);
+        put4(&mut out_dv[..=pv], dv);
+        return (first_u, first_v);
+    }
     let (nu, rest) = out.split_at_mut(pu + 1);
     let (du, rest) = rest.split_at_mut(pu + 1);
     let (nv, dv) = rest.split_at_mut(pv + 1);
@@ -443,26 +458,33 @@ impl ShapeSurfaceTool {
         let size = self.frame.u_edge.length() + self.frame.v_edge.length();
         // A rest surface without rest edits is the frame's plane, `S(u, v) = O + u·U + v·V`
         // exactly (B-splines reproduce linear functions from the Greville abscissae): its
-        // closest point solves the 2×2 normal equations directly instead of a search, and its
-        // point and derivatives there are `O + uU + vV`, `U` and `V`.
-        let (o, eu, ev) = (self.frame.origin, self.frame.u_edge, self.frame.v_edge);
-        let (a, b, c) = (eu.dot(eu), eu.dot(ev), ev.dot(ev));
-        let det = a * c - b * b;
+        // closest point solves the 2×2 normal equations directly instead of a search, a lane
+        // group at a time (`surface_lanes.rs`), and its derivatives there are `U` and `V`.
+        let plane = if planar {
+            PlanarProjection::new(&self.frame)
+        } else {
+            None
+        };
         // The bases kept per bound point, in power-form pieces (no knot search or division).
         let pieces = [BasisPieces::new(&knots[0]), BasisPieces::new(&knots[1])];
-        // The bound point of `x`, its basis values written to `weights`; `None` (and
-        // `weights` untouched) where it does not project.
-        let project = |x: Vec3, weights: &mut [f32]| -> Option<Bound> {
-            let (u, v, s) = if planar && det > 0.0 {
-                let r = x - o;
-                let (g1, g2) = (r.dot(eu), r.dot(ev));
-                let u = ((c * g1 - b * g2) / det).clamp(0.0, 1.0);
-                let v = ((a * g2 - b * g1) / det).clamp(0.0, 1.0);
-                // The point and the derivatives of the plane, without summing the net.
-                (u, v, [o + eu * u + ev * v, eu, ev])
-            } else {
-                closest_point(&knots, &rest, &samples, x)
+        // The bound point at `(u, v, u₃)` with the rest surface's derivatives `su`, `sv` and
+        // unit normal `n`, its basis values written to `weights`.
+        let bound =
+            |(u, v, u3): (f32, f32, f32), n: Vec3, su: Vec3, sv: Vec3, weights: &mut [f32]| {
+                let (first_u, first_v) = piece_bases_into(&pieces, &knots, u, v, weights);
+                Bound {
+                    uv: (u, v),
+                    u3,
+                    normal: n,
+                    du: su,
+                    dv: sv,
+                    span: (first_u as u32, first_v as u32),
+                }
             };
+        // The bound point of `x` on a curved rest surface, its basis values written to
+        // `weights`; `None` (and `weights` untouched) where it does not project.
+        let project = |x: Vec3, weights: &mut [f32]| -> Option<Bound> {
+            let (u, v, s) = closest_point(&knots, &rest, &samples, x);
             let n = s[1].cross(s[2]);
             if n.length_squared().is_nan() || n.length_squared() <= 0.0 {
                 return None;
@@ -474,15 +496,7 @@ impl ShapeSurfaceTool {
             if (r - n * u3).length() > 1e-4 * size {
                 return None;
             }
-            let (su, sv) = piece_bases_into(&pieces, &knots, u, v, weights);
-            Some(Bound {
-                uv: (u, v),
-                u3,
-                normal: n,
-                du: s[1],
-                dv: s[2],
-                span: (su as u32, sv as u32),
-            })
+            Some(bound((u, v, u3), n, s[1], s[2], weights))
         };
         // Every active vertex on its own, in parallel chunks, into its slot; a vertex that
         // does not project keeps an unused slot and is marked unbound after.
@@ -494,23 +508,38 @@ impl ShapeSurfaceTool {
         let mut projects = zeroed(m);
         let previous = previous.filter(|p| p.bind.knots == knots);
         points
-            .par_iter_mut()
-            .zip(weights.par_chunks_mut(stride))
-            .zip(projects.par_iter_mut())
-            .zip(active.par_iter())
-            .with_min_len(BIND_CHUNK)
-            .for_each(|(((point, weights), projects), &i)| {
-                if let Some((old, s)) = previous.and_then(|p| p.entry(i)) {
-                    if s != UNPROJECTED as usize {
-                        *point = old.points[s];
-                        *projects = true;
-                        weights.copy_from_slice(&old.weights[s * stride..(s + 1) * stride]);
+            .par_chunks_mut(BIND_CHUNK)
+            .zip(weights.par_chunks_mut(BIND_CHUNK * stride))
+            .zip(projects.par_chunks_mut(BIND_CHUNK))
+            .zip(active.par_chunks(BIND_CHUNK))
+            .for_each(|(((points, weights), projects), ids)| {
+                let (fresh, xs) =
+                    Reuse::split_chunk(previous, ids, input.positions, |j, old, s| {
+                        if s != UNPROJECTED as usize {
+                            points[j] = old.points[s];
+                            projects[j] = true;
+                            weights[j * stride..(j + 1) * stride]
+                                .copy_from_slice(&old.weights[s * stride..(s + 1) * stride]);
+                        }
+                    });
+                if let Some(plane) = &plane {
+                    let mut found = vec![None; xs.len()];
+                    plane.project_each(&xs, &mut found);
+                    let (su, sv) = (plane.u_edge, plane.v_edge);
+                    for (&j, p) in fresh.iter().zip(found) {
+                        if let (Some(p), Some(n)) = (p, plane.normal) {
+                            let w = &mut weights[j * stride..(j + 1) * stride];
+                            points[j] = bound(p, n, su, sv, w);
+                            projects[j] = true;
+                        }
                     }
                     return;
                 }
-                if let Some(b) = project(input.positions[i as usize], weights) {
-                    *point = b;
-                    *projects = true;
+                for (&j, x) in fresh.iter().zip(xs) {
+                    if let Some(b) = project(x, &mut weights[j * stride..(j + 1) * stride]) {
+                        points[j] = b;
+                        projects[j] = true;
+                    }
                 }
             });
         for (&i, _) in active.iter().zip(&projects).filter(|(_, p)| !**p) {
