@@ -395,18 +395,20 @@ impl CurveTool {
                     });
                 let mut found = vec![(Closest::default(), 0.0); xs.len()];
                 pieces.closest_each(&xs, &mut found);
-                let mut fresh_weights = vec![0.0; xs.len() * stride];
-                pieces.weights_each(&found, &mut fresh_weights);
-                for (((&j, x), (c, _)), w) in fresh
-                    .iter()
-                    .zip(xs)
-                    .zip(found)
-                    .zip(fresh_weights.chunks_exact(stride))
-                {
+                if fresh.len() == ids.len() {
+                    // Nothing reused (a first bind): the weights go straight to the chunk.
+                    pieces.weights_each(&found, weights);
+                } else {
+                    let mut fresh_weights = vec![0.0; xs.len() * stride];
+                    pieces.weights_each(&found, &mut fresh_weights);
+                    for (&j, w) in fresh.iter().zip(fresh_weights.chunks_exact(stride)) {
+                        weights[j * stride..(j + 1) * stride].copy_from_slice(w);
+                    }
+                }
+                for ((&j, x), (c, _)) in fresh.iter().zip(xs).zip(found) {
                     params[j] = c.t;
                     offsets[j] = x - c.point;
                     firsts[j] = pieces.first(c.piece) as u32;
-                    weights[j * stride..(j + 1) * stride].copy_from_slice(w);
                 }
             });
         Ok(CurveBind {

@@ -14,7 +14,8 @@
 use glam::Vec3;
 
 use crate::curve_pieces::{Closest, CurvePieces, REFINE_STEPS};
-use crate::lane::{LANES, Lane, Lanes3, Mask};
+use crate::frames::BOUND_BATCH;
+use crate::lane::{LANES, Lane, Lanes3, Mask, copy_prefix};
 
 impl CurvePieces {
     /// [`CurvePieces::closest`] of every point of `xs`, written to `out` (as long as `xs`):
@@ -171,9 +172,10 @@ impl pulp::WithSimd for ClosestEach<'_> {
             }
             return;
         }
+        let mut bounds = [Lane::ZERO; BOUND_BATCH];
         for (xs, out) in self.xs.chunks(LANES).zip(self.out.chunks_mut(LANES)) {
             let x = Lanes3::load(xs);
-            let seeds = pieces.index.closest_lanes(&x);
+            let seeds = pieces.index.closest_lanes(&x, &mut bounds);
             let finite = seeds.d2.is_finite();
             let (k, u, c, d2) = pieces.closest_lanes(&x, seeds.segment, seeds.fraction);
             for (j, o) in out.iter_mut().enumerate() {
@@ -232,7 +234,7 @@ impl pulp::WithSimd for WeightsEach<'_> {
             {
                 acc = acc * u + row;
             }
-            o.copy_from_slice(&acc.as_array()[..stride]);
+            copy_prefix(o, acc.as_array());
         }
     }
 }

@@ -29,7 +29,7 @@ use glam::{Vec3, Vec4};
 use crate::basis::{basis_at_span, bernstein_all};
 use crate::curve::{CurveBasis, CurveEvaluator};
 use crate::frames::PolylineIndex;
-use crate::lane::{LANES, Lane};
+use crate::lane::{LANES, Lane, copy_prefix};
 
 /// Pieces per control point (at least; a B-spline rounds up to whole knot spans).
 const PIECES_PER_POINT: usize = 16;
@@ -474,8 +474,8 @@ impl BasisPieces {
     pub fn values_and_derivatives(&self, t: f32, values: &mut [f32], derivs: &mut [f32]) -> usize {
         let p = self.degree;
         if let Some((first, y, dy)) = self.values_and_derivatives4(t) {
-            put4(&mut values[..=p], y);
-            put4(&mut derivs[..=p], dy);
+            copy_prefix(&mut values[..=p], &y.to_array());
+            copy_prefix(&mut derivs[..=p], &dy.to_array());
             return first;
         }
         let (k, u, t) = self.piece_of(t);
@@ -499,20 +499,6 @@ impl BasisPieces {
             values[..=p].copy_from_slice(&self.end);
         }
         self.firsts[k] as usize
-    }
-}
-
-/// The first `out.len()` (at most 4) lanes of `v` into `out`, as fixed-size stores (a
-/// copy of a run-time length would call `memcpy`).
-#[inline(always)]
-pub(crate) fn put4(out: &mut [f32], v: Vec4) {
-    let a = v.to_array();
-    match out.len() {
-        4 => out.copy_from_slice(&a),
-        3 => out.copy_from_slice(&a[..3]),
-        2 => out.copy_from_slice(&a[..2]),
-        1 => out[0] = a[0],
-        n => out.copy_from_slice(&a[..n]),
     }
 }
 

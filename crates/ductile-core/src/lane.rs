@@ -439,6 +439,24 @@ impl Not for Mask {
     }
 }
 
+/// The first `out.len()` values of `a` into `out`, as one fixed-size copy for every length up
+/// to 16 (a copy of a run-time length calls `memcpy`, which costs more than the few values).
+///
+/// # Panics
+/// When `out` is longer than `a`.
+#[inline(always)]
+pub(crate) fn copy_prefix<const N: usize>(out: &mut [f32], a: &[f32; N]) {
+    macro_rules! fixed {
+        ($($n:literal)*) => {
+            match out.len() {
+                $($n if $n <= N => out.copy_from_slice(&a[..$n]),)*
+                n => out.copy_from_slice(&a[..n]),
+            }
+        };
+    }
+    fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
+}
+
 /// A lane group of points in structure-of-arrays form: the lanes of the FFSD and
 /// volume-mask kernels.
 #[derive(Debug, Clone, Copy)]
@@ -584,6 +602,20 @@ mod tests {
 
     /// Loading and gathering whole and partial groups put point `j` in lane `j` (the last
     /// point repeated in the lanes past a partial group's end).
+    #[test]
+    fn copy_prefix_copies_every_length_and_nothing_more() {
+        let a: [f32; 16] = core::array::from_fn(|i| i as f32 + 1.0);
+        for n in 0..=16 {
+            let mut out = [-1.0_f32; 17];
+            copy_prefix(&mut out[..n], &a);
+            assert_eq!(&out[..n], &a[..n], "length {n}");
+            assert!(out[n..].iter().all(|&v| v == -1.0), "length {n}");
+        }
+        let mut four = [0.0; 3];
+        copy_prefix(&mut four, &[5.0, 6.0, 7.0, 8.0]);
+        assert_eq!(four, [5.0, 6.0, 7.0]);
+    }
+
     #[test]
     fn loaded_and_gathered_lanes_hold_their_points() {
         let points: Vec<Vec3> = (0..40)

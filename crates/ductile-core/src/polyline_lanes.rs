@@ -27,6 +27,9 @@ pub(crate) struct Seeds {
     pub(crate) d2: Lane,
 }
 
+/// Scratch space for a lane group's squared distances to a batch of block boxes.
+pub(crate) type Bounds = [Lane; BOUND_BATCH];
+
 /// The most segments whose indices the lanes hold exactly as `f32`.
 const EXACT_SEGMENTS: usize = 1 << 24;
 
@@ -52,16 +55,17 @@ impl PolylineIndex {
     }
 
     /// The closest points of a lane group (module documentation). Lanes whose `d2` is not
-    /// finite must be answered again by [`PolylineIndex::closest`].
+    /// finite must be answered again by [`PolylineIndex::closest`]. `bounds` is scratch
+    /// space, kept by the caller across lane groups (zeroing 4 KiB per group was a fifth of a
+    /// curve bind's instructions).
     #[inline(always)]
-    pub(crate) fn closest_lanes(&self, x: &Lanes3) -> Seeds {
+    pub(crate) fn closest_lanes(&self, x: &Lanes3, bounds: &mut Bounds) -> Seeds {
         let blocks = self.lanes.len();
-        let mut bounds = [Lane::ZERO; BOUND_BATCH];
         // The first search: lane 0's first block of least bound (the lanes of a group are
         // usually near each other).
         let mut start = (0, f32::INFINITY);
         for from in (0..blocks).step_by(BOUND_BATCH) {
-            let len = self.bound_lanes(x, from, &mut bounds);
+            let len = self.bound_lanes(x, from, bounds);
             for (k, d) in bounds[..len].iter().enumerate() {
                 let d = d.as_array()[0];
                 if d < start.1 {
@@ -79,7 +83,7 @@ impl PolylineIndex {
             let len = if blocks <= BOUND_BATCH {
                 blocks
             } else {
-                self.bound_lanes(x, from, &mut bounds)
+                self.bound_lanes(x, from, bounds)
             };
             for (k, d) in bounds[..len].iter().enumerate() {
                 let b = from + k;
@@ -94,7 +98,7 @@ impl PolylineIndex {
     /// The squared distances from each lane's point to the boxes of blocks `from..` (at
     /// most [`BOUND_BATCH`]), as [`PolylineIndex::closest`]'s scalar bounds; returns how many.
     #[inline(always)]
-    fn bound_lanes(&self, x: &Lanes3, from: usize, out: &mut [Lane; BOUND_BATCH]) -> usize {
+    fn bound_lanes(&self, x: &Lanes3, from: usize, out: &mut Bounds) -> usize {
         let len = (self.lanes.len() - from).min(BOUND_BATCH);
         let [lx, ly, lz, hx, hy, hz] = &self.boxes;
         let zero = Lane::ZERO;
@@ -172,8 +176,9 @@ impl pulp::WithSimd for ClosestEach<'_> {
             }
             return;
         }
+        let mut bounds = [Lane::ZERO; BOUND_BATCH];
         for (xs, out) in self.xs.chunks(LANES).zip(self.out.chunks_mut(LANES)) {
-            let seeds = index.closest_lanes(&Lanes3::load(xs));
+            let seeds = index.closest_lanes(&Lanes3::load(xs), &mut bounds);
             let finite = seeds.d2.is_finite();
             for (j, o) in out.iter_mut().enumerate() {
                 *o = if finite.lane(j) {

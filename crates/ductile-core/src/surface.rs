@@ -20,8 +20,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE};
 use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots, zeroed};
-use crate::curve_pieces::{BasisPieces, put4};
+use crate::curve_pieces::BasisPieces;
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
+use crate::lane::copy_prefix;
 use crate::surface_lanes::PlanarProjection;
 use crate::tool::{BindInput, Deformer};
 
@@ -224,10 +225,10 @@ fn piece_bases_into(
         let (out_nu, rest) = out.split_at_mut(pu + 1);
         let (out_du, rest) = rest.split_at_mut(pu + 1);
         let (out_nv, out_dv) = rest.split_at_mut(pv + 1);
-        put4(out_nu, nu);
-        put4(out_du, du);
-        put4(out_nv, nv);
-        put4(&mut out_dv[..=pv], dv);
+        copy_prefix(out_nu, &nu.to_array());
+        copy_prefix(out_du, &du.to_array());
+        copy_prefix(out_nv, &nv.to_array());
+        copy_prefix(&mut out_dv[..=pv], &dv.to_array());
         return (first_u, first_v);
     }
     let (nu, rest) = out.split_at_mut(pu + 1);
