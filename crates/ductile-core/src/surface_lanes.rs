@@ -7,9 +7,9 @@
 //! normal equations `[U·U U·V; U·V V·V] (u, v) = ((x − O)·U, (x − O)·V)` by Cramer's rule,
 //! clamped to `[0, 1]²`; `u₃ = (x − S(u, v))·N` with the plane's unit normal `N = U × V / |U × V|`,
 //! and the point projects when the residual `|x − S − u₃ N|` is at most `10⁻⁴ (|U| + |V|)`
-//! (docs/algorithms/shape-surface.md). [`PlanarProjection::project`] is the scalar form;
-//! every lane of [`PlanarProjection::project_each`] does its operations in their order, so each
-//! answer has its bits.
+//! (docs/algorithms/shape-surface.md). `PlanarProjection::project` (built for the tests) is the
+//! scalar form; every lane of [`PlanarProjection::project_each`] does its operations in their
+//! order, so each answer has its bits.
 
 use glam::Vec3;
 
@@ -82,7 +82,7 @@ impl PlanarProjection {
         Some((u, v, u3))
     }
 
-    /// [`PlanarProjection::project`] of every point of `xs`, written to `out` (as long as
+    /// `PlanarProjection::project` of every point of `xs`, written to `out` (as long as
     /// `xs`): the same bits, a lane group at a time.
     ///
     /// # Panics
@@ -101,7 +101,7 @@ impl PlanarProjection {
         });
     }
 
-    /// `(u₁, u₂, u₃)` of each lane and whether it projects ([`PlanarProjection::project`]'s
+    /// `(u₁, u₂, u₃)` of each lane and whether it projects (`PlanarProjection::project`'s
     /// operations on the lanes).
     #[inline(always)]
     fn project_lanes(&self, x: &Lanes3, n: Vec3) -> (Lane, Lane, Lane, Mask) {
