@@ -396,7 +396,8 @@ impl CurveTool {
                 let mut found = vec![(Closest::default(), 0.0); xs.len()];
                 pieces.closest_each(&xs, &mut found);
                 if fresh.len() == ids.len() {
-                    // Nothing reused (a first bind): the weights go straight to the chunk.
+                    // Nothing reused in this chunk (a first bind, say): the weights go
+                    // straight to it.
                     pieces.weights_each(&found, weights);
                 } else {
                     let mut fresh_weights = vec![0.0; xs.len() * stride];

@@ -440,8 +440,8 @@ impl BasisPieces {
     }
 
     /// For a degree up to 3, [`BasisPieces::values_and_derivatives`] in the lanes of two
-    /// vectors (lanes past `p` are 0) with the index of the first function; `None` for a
-    /// higher degree.
+    /// vectors (lanes past `p` are 0 for a finite `t`) with the index of the first function;
+    /// `None` for a higher degree.
     #[inline(always)]
     #[must_use]
     pub fn values_and_derivatives4(&self, t: f32) -> Option<(usize, Vec4, Vec4)> {

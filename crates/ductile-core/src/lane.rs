@@ -600,8 +600,6 @@ mod tests {
     use super::*;
     use wide::f32x16;
 
-    /// Loading and gathering whole and partial groups put point `j` in lane `j` (the last
-    /// point repeated in the lanes past a partial group's end).
     #[test]
     fn copy_prefix_copies_every_length_and_nothing_more() {
         let a: [f32; 16] = core::array::from_fn(|i| i as f32 + 1.0);
@@ -616,6 +614,43 @@ mod tests {
         assert_eq!(four, [5.0, 6.0, 7.0]);
     }
 
+    #[test]
+    #[should_panic]
+    fn copy_prefix_refuses_a_destination_longer_than_the_source() {
+        let mut out = [0.0; 5];
+        copy_prefix(&mut out, &[1.0, 2.0, 3.0, 4.0]);
+    }
+
+    /// `clamp01` is `f32::clamp(0, 1)` lane by lane: NaN stays NaN, −0.0 keeps its sign and
+    /// the infinities go to the ends.
+    #[test]
+    fn clamp01_is_f32_clamp_in_every_lane() {
+        let xs = [
+            f32::NAN,
+            -0.0,
+            0.0,
+            -1e-30,
+            0.5,
+            1.0,
+            1.0 + f32::EPSILON,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            -3.0,
+            7.0,
+            1e-40,
+            0.999_999_9,
+            -f32::NAN,
+            2.0,
+            0.25,
+        ];
+        let got = Lane(xs).clamp01();
+        for (x, y) in xs.iter().zip(got.0) {
+            assert_eq!(y.to_bits(), x.clamp(0.0, 1.0).to_bits(), "{x}");
+        }
+    }
+
+    /// Loading and gathering whole and partial groups put point `j` in lane `j` (the last
+    /// point repeated in the lanes past a partial group's end).
     #[test]
     fn loaded_and_gathered_lanes_hold_their_points() {
         let points: Vec<Vec3> = (0..40)

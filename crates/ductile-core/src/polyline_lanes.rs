@@ -56,8 +56,8 @@ impl PolylineIndex {
 
     /// The closest points of a lane group (module documentation). Lanes whose `d2` is not
     /// finite must be answered again by [`PolylineIndex::closest`]. `bounds` is scratch
-    /// space, kept by the caller across lane groups (zeroing 4 KiB per group was a fifth of a
-    /// curve bind's instructions).
+    /// space, kept by the caller across lane groups (zeroing its 4 KiB per group cost a curve
+    /// bind about 14 % more instructions, by callgrind).
     #[inline(always)]
     pub(crate) fn closest_lanes(&self, x: &Lanes3, bounds: &mut Bounds) -> Seeds {
         let blocks = self.lanes.len();

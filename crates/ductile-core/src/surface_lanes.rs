@@ -6,10 +6,10 @@
 //! linear functions from the Greville abscissae), so a point's closest point solves the 2×2
 //! normal equations `[U·U U·V; U·V V·V] (u, v) = ((x − O)·U, (x − O)·V)` by Cramer's rule,
 //! clamped to `[0, 1]²`; `u₃ = (x − S(u, v))·N` with the plane's unit normal `N = U × V / |U × V|`,
-//! and the point projects when the residual `|x − S − u₃ N|` is at most `10⁻⁴ (|U| + |V|)`
-//! (docs/algorithms/shape-surface.md). `PlanarProjection::project` (built for the tests) is the
-//! scalar form; every lane of [`PlanarProjection::project_each`] does its operations in their
-//! order, so each answer has its bits.
+//! and the point projects when the residual `|x − S − u₃ N|` is at most `10⁻⁴ (|U| + |V|)` or
+//! NaN (docs/algorithms/shape-surface.md). `PlanarProjection::project` (built for the tests)
+//! is the scalar form; every lane of [`PlanarProjection::project_each`] does its operations in
+//! their order, so each answer has its bits.
 
 use glam::Vec3;
 

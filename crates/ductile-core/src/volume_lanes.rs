@@ -191,10 +191,7 @@ impl LaneInfluence {
     #[inline(always)]
     fn falloff(&self, t: Lane) -> Lane {
         let one = Lane::splat(1.0);
-        let s = (one - t) / Lane::splat(1.0 - self.inner);
-        // `f32::clamp(0, 1)`.
-        let s = s.simd_lt(Lane::ZERO).select(Lane::ZERO, s);
-        let s = s.simd_gt(one).select(one, s);
+        let s = ((one - t) / Lane::splat(1.0 - self.inner)).clamp01();
         let f = match self.falloff {
             LaneFalloff::None => one,
             LaneFalloff::Linear => s,
