@@ -355,6 +355,54 @@ impl<'a> Earlier<'a> {
         self.stale.get(i as usize).copied().unwrap_or(true)
     }
 
+    /// Bit `j` set when vertex `ids[j]` is stale (at most 32 vertices).
+    #[inline(always)]
+    pub(crate) fn stale_lanes(&self, ids: &[u32]) -> u32 {
+        ids.iter()
+            .enumerate()
+            .fold(0, |bits, (j, &i)| bits | (u32::from(self.is_stale(i)) << j))
+    }
+
+    /// [`Earlier::stale_lanes`] of the `len` (at most 16) consecutive vertices from `first`:
+    /// their flags read as one 128-bit word when they are 16 and in range, so that a group
+    /// where nothing or everything moved costs a load and a comparison.
+    #[inline(always)]
+    pub(crate) fn stale_run(&self, first: u32, len: usize) -> u32 {
+        const ALL: u128 = u128::from_le_bytes([1; 16]);
+        let at = first as usize;
+        if len == 16
+            && let Some(flags) = self.stale.get(at..at + 16)
+            && let Ok(bytes) = <[u8; 16]>::try_from(bytemuck::cast_slice::<bool, u8>(flags))
+        {
+            match u128::from_le_bytes(bytes) {
+                0 => return 0,
+                ALL => return 0xffff,
+                _ => {}
+            }
+        }
+        (0..len as u32).fold(0, |bits, j| {
+            bits | (u32::from(self.is_stale(first + j)) << j)
+        })
+    }
+
+    /// Appends `old`'s entries from vertex `first` to vertex `last` (both included) to
+    /// `mask`: the mask of a run of vertices none of which is stale, when every vertex of the
+    /// run was a candidate of `old` too. `first` at least every vertex looked up before.
+    #[inline(always)]
+    pub(crate) fn copy_run(&mut self, first: u32, last: u32, mask: &mut Mask) {
+        let indices = &self.old.indices;
+        while indices.get(self.next).is_some_and(|&x| x < first) {
+            self.next += 1;
+        }
+        let start = self.next;
+        while indices.get(self.next).is_some_and(|&x| x <= last) {
+            self.next += 1;
+        }
+        mask.indices.extend_from_slice(&indices[start..self.next]);
+        mask.weights
+            .extend_from_slice(&self.old.weights[start..self.next]);
+    }
+
     /// `old`'s weight of `i` (0 when `i` is not in it); `i` at least every earlier one.
     #[inline(always)]
     pub(crate) fn weight(&mut self, i: u32) -> f32 {
@@ -1045,17 +1093,24 @@ mod tests {
             };
             let m = inf.mask(&positions);
             proptest::prop_assert_eq!(mask_bits(&m), weighed_bits(&inf, &positions));
-            // Made from this mask after a few runs of vertices moved (some lane groups
-            // without a stale vertex, some partly stale), it is the fresh mask there.
-            let stale: Vec<bool> = (0..n).map(|v| (v / 5) % 7 == 3 || v % 31 == 0).collect();
-            let after: Vec<Vec3> = positions
-                .iter()
-                .zip(&stale)
-                .map(|(&p, &s)| if s { p * 0.8 + Vec3::new(0.1, -0.2, 0.05) } else { p })
-                .collect();
-            let area = inf.area.as_deref();
-            let reused = inf.mask_reusing(area, &after, &m, &stale);
-            proptest::prop_assert_eq!(mask_bits(&reused), weighed_bits(&inf, &after));
+            // Made from this mask after a few runs of vertices moved, it is the fresh mask
+            // there: short runs (lane groups without a stale vertex, and partly stale ones)
+            // and long runs (wholly stale groups too).
+            let patterns: [fn(usize) -> bool; 2] = [
+                |v| (v / 5) % 7 == 3 || v % 31 == 0,
+                |v| (v / 40) % 3 == 1 || v % 97 == 0,
+            ];
+            for pattern in patterns {
+                let stale: Vec<bool> = (0..n).map(pattern).collect();
+                let after: Vec<Vec3> = positions
+                    .iter()
+                    .zip(&stale)
+                    .map(|(&p, &s)| if s { p * 0.8 + Vec3::new(0.1, -0.2, 0.05) } else { p })
+                    .collect();
+                let area = inf.area.as_deref();
+                let reused = inf.mask_reusing(area, &after, &m, &stale);
+                proptest::prop_assert_eq!(mask_bits(&reused), weighed_bits(&inf, &after));
+            }
         }
     }
 }

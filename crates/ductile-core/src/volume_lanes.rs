@@ -298,42 +298,6 @@ impl Source<'_> {
     }
 }
 
-/// One lane group of the kernel: weighs `ids` (the positions from `source`, read only when
-/// some vertex needs a fresh weight) and appends those of positive weight to `mask`. A
-/// function, not a closure, so that it is compiled with the kernel's target features.
-#[inline(always)]
-fn weigh_group(
-    influence: &LaneInfluence,
-    earlier: &mut Option<Earlier<'_>>,
-    ids: &[u32],
-    source: Source<'_>,
-    mask: &mut Mask,
-) {
-    let fresh = earlier
-        .as_ref()
-        .is_none_or(|e| ids.iter().any(|&i| e.is_stale(i)));
-    let w = if fresh {
-        influence.weights(&source.lanes())
-    } else {
-        Lane::ZERO
-    };
-    // Most groups of a small volume's mask are outside it: with nothing earlier to keep,
-    // a group of no positive weight appends nothing, and the lane loop is skipped.
-    if earlier.is_none() && !w.simd_gt(Lane::ZERO).any() {
-        return;
-    }
-    for (&i, &w) in ids.iter().zip(w.as_array()) {
-        let w = match earlier {
-            Some(e) if !e.is_stale(i) => e.weight(i),
-            _ => w,
-        };
-        if w > 0.0 {
-            mask.indices.push(i);
-            mask.weights.push(w);
-        }
-    }
-}
-
 impl pulp::WithSimd for Gather<'_> {
     type Output = Mask;
 
@@ -348,6 +312,9 @@ impl pulp::WithSimd for Gather<'_> {
             .reuse
             .map(|(old, stale)| Earlier::new(old, stale, start));
         let influence = self.influence;
+        // The first and last vertex of the lane groups without a stale vertex met since the
+        // last group with one: their earlier entries are copied at once.
+        let mut clean: Option<(u32, u32)> = None;
         match self.ids {
             Ids::Range(start, end) => {
                 let points = &self.positions[start as usize..end as usize];
@@ -358,16 +325,105 @@ impl pulp::WithSimd for Gather<'_> {
                         *id = first + j as u32;
                     }
                     let ids = &ids[..chunk.len()];
-                    weigh_group(influence, &mut earlier, ids, Source::Load(chunk), &mut mask);
+                    let stale = earlier.as_ref().map(|e| e.stale_run(first, chunk.len()));
+                    let source = Source::Load(chunk);
+                    weigh_group(
+                        influence,
+                        &mut earlier,
+                        &mut clean,
+                        ids,
+                        stale,
+                        source,
+                        &mut mask,
+                    );
                 }
             }
             Ids::List(ids) => {
                 for chunk in ids.chunks(LANES) {
+                    let stale = earlier.as_ref().map(|e| e.stale_lanes(chunk));
                     let source = Source::Gather(self.positions, chunk);
-                    weigh_group(influence, &mut earlier, chunk, source, &mut mask);
+                    weigh_group(
+                        influence,
+                        &mut earlier,
+                        &mut clean,
+                        chunk,
+                        stale,
+                        source,
+                        &mut mask,
+                    );
                 }
             }
         }
+        if let (Some(e), Some((first, last))) = (&mut earlier, clean) {
+            e.copy_run(first, last, &mut mask);
+        }
         mask
+    }
+}
+
+/// One lane group of the kernel: weighs `ids` (the positions from `source`, read only when
+/// some vertex needs a fresh weight) and appends those of positive weight to `mask`. With an
+/// earlier mask, `stale` has bit `j` set when lane `j`'s vertex is stale; a group without a
+/// stale vertex only extends the run `clean`, whose earlier entries are appended when a
+/// group with one comes (or by the caller at the end). A function, not a closure, so that
+/// it is compiled with the kernel's target features.
+#[inline(always)]
+fn weigh_group(
+    influence: &LaneInfluence,
+    earlier: &mut Option<Earlier<'_>>,
+    clean: &mut Option<(u32, u32)>,
+    ids: &[u32],
+    stale: Option<u32>,
+    source: Source<'_>,
+    mask: &mut Mask,
+) {
+    let (Some(e), Some(stale)) = (earlier, stale) else {
+        let w = influence.weights(&source.lanes());
+        // Most groups of a small volume's mask are outside it: a group of no positive
+        // weight appends nothing, and the lane loop is skipped.
+        if w.simd_gt(Lane::ZERO).any() {
+            push_positive(ids, &w, mask);
+        }
+        return;
+    };
+    let (first, last) = (ids[0], ids[ids.len() - 1]);
+    if stale == 0 {
+        // Nothing moved: the group's earlier entries stay as they are.
+        *clean = Some((clean.map_or(first, |(f, _)| f), last));
+        return;
+    }
+    if let Some((f, l)) = clean.take() {
+        e.copy_run(f, l, mask);
+    }
+    let w = influence.weights(&source.lanes());
+    if stale.count_ones() as usize == ids.len() {
+        // Everything moved: the fresh weights alone (the group's earlier entries are passed
+        // over by the next lookup).
+        if w.simd_gt(Lane::ZERO).any() {
+            push_positive(ids, &w, mask);
+        }
+        return;
+    }
+    for (j, (&i, &w)) in ids.iter().zip(w.as_array()).enumerate() {
+        let w = if stale & (1 << j) == 0 {
+            e.weight(i)
+        } else {
+            w
+        };
+        if w > 0.0 {
+            mask.indices.push(i);
+            mask.weights.push(w);
+        }
+    }
+}
+
+/// Appends the vertices of `ids` whose weight in `w` (lane by lane) is positive to `mask`.
+#[inline(always)]
+fn push_positive(ids: &[u32], w: &Lane, mask: &mut Mask) {
+    for (&i, &w) in ids.iter().zip(w.as_array()) {
+        if w > 0.0 {
+            mask.indices.push(i);
+            mask.weights.push(w);
+        }
     }
 }

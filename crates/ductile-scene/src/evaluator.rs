@@ -388,6 +388,70 @@ impl Dirty {
         }
     }
 
+    /// [`Dirty::advance_old`], [`Dirty::advance_new`] and [`Dirty::settle_common`] in one
+    /// merge of the two stages' active vertices (in parallel chunks of `new`'s, each owning
+    /// the flags of its vertices): a vertex active in both is settled by the two outputs, one
+    /// active in one stage only is added when that stage moved it.
+    fn settle_merged(&mut self, old: &Stage, new: &Stage) {
+        let (a, b) = (old.indices(), new.indices());
+        let n = self.flag.len();
+        if [a, b]
+            .iter()
+            .any(|s| s.last().is_some_and(|&v| v as usize >= n))
+        {
+            self.advance_old(old);
+            self.advance_new(new);
+            self.settle_common(old, new);
+            return;
+        }
+        let parts = map_chunks_at(&mut self.flag, b, |k0, chunk, flags| {
+            // The chunk owns the vertices from its first (0 for the first chunk) to the
+            // next chunk's first.
+            let lo = if k0 == 0 { 0 } else { b[k0] };
+            let hi = b.get(k0 + chunk.len()).map_or(n, |&v| v as usize);
+            let i1 = a.partition_point(|&v| (v as usize) < hi);
+            let mut i = a[..i1].partition_point(|&v| v < lo);
+            let (mut removed, mut added) = (0_usize, Vec::new());
+            let mut mark = |v: u32, differs: bool, settles: bool| {
+                let f = flags.get(v);
+                if differs {
+                    if !*f {
+                        *f = true;
+                        added.push(v);
+                    }
+                } else if settles && *f {
+                    *f = false;
+                    removed += 1;
+                }
+            };
+            let mut j = 0;
+            while i < i1 || j < chunk.len() {
+                let k = k0 + j;
+                match (a[..i1].get(i), chunk.get(j)) {
+                    (Some(&u), Some(&v)) if u == v => {
+                        mark(u, !same_bits(old.written[i], new.written[k]), true);
+                        i += 1;
+                        j += 1;
+                    }
+                    (Some(&u), v) if v.is_none_or(|&v| u < v) => {
+                        mark(u, !same_bits(old.saved[i], old.written[i]), false);
+                        i += 1;
+                    }
+                    (_, Some(&v)) => {
+                        mark(v, !same_bits(new.saved[k], new.written[k]), false);
+                        j += 1;
+                    }
+                    (_, None) => break,
+                }
+            }
+            (removed, added)
+        });
+        for (removed, added) in parts {
+            self.count = self.count - removed + added.len();
+            self.list.extend(added);
+        }
+    }
+
     /// Both evaluations went through a stage (`old`, `new`) after [`Dirty::advance_old`]
     /// and [`Dirty::advance_new`]: a vertex active in both now holds each stage's output, so
     /// it differs exactly when those differ.
@@ -1102,11 +1166,7 @@ impl MeshEvaluator {
                 {
                     self.dirty.settle_same(o, &stage)
                 }
-                Some(o) => {
-                    self.dirty.advance_old(o);
-                    self.dirty.advance_new(&stage);
-                    self.dirty.settle_common(o, &stage);
-                }
+                Some(o) => self.dirty.settle_merged(o, &stage),
                 None => self.dirty.advance_new(&stage),
             }
             self.stages.push(stage);

@@ -991,3 +991,83 @@ fn large_edits_patch_the_output_in_blocks_exactly() {
         }
     }
 }
+
+/// The merged settle of two stages with different active vertices leaves the set exactly
+/// as the three passes it replaces (advance the old stage, advance the new, settle the
+/// common vertices): the same flags, count and members, on a mesh long enough that the
+/// merge runs in several parallel chunks, and with vertices of the old stage below the
+/// new stage's first and above its last.
+#[test]
+fn a_merged_settle_is_the_three_passes() {
+    let n = 5 * ductile_core::chunks::CHUNK + 777;
+    let mut state = 0x9e37_79b9_u32;
+    let mut r = move || {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        state
+    };
+    let stage = |indices: Vec<u32>, r: &mut dyn FnMut() -> u32| {
+        // Inputs and outputs of three kinds: moved, kept, and (for the common vertices)
+        // the same output as the other stage.
+        let saved: Vec<Vec3> = indices.iter().map(|&v| Vec3::splat(v as f32)).collect();
+        let written = indices
+            .iter()
+            .map(|&v| match r() % 3 {
+                0 => Vec3::splat(v as f32),
+                1 => Vec3::new(v as f32, 1.0, 0.0),
+                _ => Vec3::new(v as f32, 0.0, (r() % 2) as f32),
+            })
+            .collect();
+        Stage {
+            index: 0,
+            resolved: Resolved {
+                layer: Layer::new("l", Tool::Ffsd(FfsdTool::new(Vec::new()))),
+                area: None,
+            },
+            binding: LayerBinding {
+                mask: Arc::new(Mask {
+                    weights: vec![1.0; indices.len()],
+                    indices,
+                }),
+                bind: None,
+            },
+            saved,
+            written,
+        }
+    };
+    for round in 0..4 {
+        let old_idx: Vec<u32> = (0..n as u32).filter(|&v| v < 300 || r() % 4 != 0).collect();
+        let new_idx: Vec<u32> = (300..n as u32 - 200).filter(|_| r() % 3 != 0).collect();
+        let old = stage(old_idx, &mut r);
+        let new = stage(new_idx, &mut r);
+        let mut reference = Dirty::default();
+        reference.reset(n);
+        for v in 0..n as u32 {
+            if r() % 5 == round {
+                reference.insert(v);
+            }
+        }
+        let mut merged = Dirty {
+            flag: reference.flag.clone(),
+            list: reference.list.clone(),
+            count: reference.count,
+        };
+        reference.advance_old(&old);
+        reference.advance_new(&new);
+        reference.settle_common(&old, &new);
+        merged.settle_merged(&old, &new);
+        assert_eq!(merged.flag, reference.flag, "round {round}");
+        assert_eq!(merged.count, reference.count, "round {round}");
+        let members = |d: &mut Dirty| {
+            let mut m = d.drain();
+            m.sort_unstable();
+            m
+        };
+        assert_eq!(
+            members(&mut merged),
+            members(&mut reference),
+            "round {round}"
+        );
+    }
+}
