@@ -386,8 +386,10 @@ impl<'a> Earlier<'a> {
     }
 
     /// Appends `old`'s entries from vertex `first` to vertex `last` (both included) to
-    /// `mask`: the mask of a run of vertices none of which is stale, when every vertex of the
-    /// run was a candidate of `old` too. `first` at least every vertex looked up before.
+    /// `mask`: the mask of a run of vertices none of which is stale. Every entry of `old` in
+    /// that span must be a vertex of the run (true when `old` was made from the same
+    /// candidates: the same area, or every vertex), and its weight is positive, as in every
+    /// mask. `first` must be at least every vertex looked up before.
     #[inline(always)]
     pub(crate) fn copy_run(&mut self, first: u32, last: u32, mask: &mut Mask) {
         let indices = &self.old.indices;

@@ -391,7 +391,9 @@ impl Dirty {
     /// [`Dirty::advance_old`], [`Dirty::advance_new`] and [`Dirty::settle_common`] in one
     /// merge of the two stages' active vertices (in parallel chunks of `new`'s, each owning
     /// the flags of its vertices): a vertex active in both is settled by the two outputs, one
-    /// active in one stage only is added when that stage moved it.
+    /// active in one stage only is added when that stage moved it. The flags, the count and
+    /// the members are those of the three passes; the list only lacks the entries they would
+    /// have added and removed again.
     fn settle_merged(&mut self, old: &Stage, new: &Stage) {
         let (a, b) = (old.indices(), new.indices());
         let n = self.flag.len();
@@ -406,7 +408,7 @@ impl Dirty {
         }
         let parts = map_chunks_at(&mut self.flag, b, |k0, chunk, flags| {
             // The chunk owns the vertices from its first (0 for the first chunk) to the
-            // next chunk's first.
+            // next chunk's first (`n` for the last).
             let lo = if k0 == 0 { 0 } else { b[k0] };
             let hi = b.get(k0 + chunk.len()).map_or(n, |&v| v as usize);
             let i1 = a.partition_point(|&v| (v as usize) < hi);
@@ -441,6 +443,7 @@ impl Dirty {
                         mark(v, !same_bits(new.saved[k], new.written[k]), false);
                         j += 1;
                     }
+                    // Not reached: the loop runs while either list has entries left.
                     (_, None) => break,
                 }
             }
