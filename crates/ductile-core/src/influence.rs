@@ -363,14 +363,14 @@ impl<'a> Earlier<'a> {
             .fold(0, |bits, (j, &i)| bits | (u32::from(self.is_stale(i)) << j))
     }
 
-    /// [`Earlier::stale_lanes`] of the `len` (at most 16) consecutive vertices from `first`:
-    /// their flags read as one 128-bit word when they are 16 and in range, so that a group
-    /// where nothing or everything moved costs a load and a comparison.
+    /// [`Earlier::stale_lanes`] of consecutive vertices `ids`: their flags read as one
+    /// 128-bit word when they are 16 and in range, so that a group where nothing or
+    /// everything moved costs a load and a comparison.
     #[inline(always)]
-    pub(crate) fn stale_run(&self, first: u32, len: usize) -> u32 {
+    pub(crate) fn stale_run(&self, ids: &[u32]) -> u32 {
         const ALL: u128 = u128::from_le_bytes([1; 16]);
-        let at = first as usize;
-        if len == 16
+        let at = ids.first().map_or(0, |&i| i as usize);
+        if ids.len() == 16
             && let Some(flags) = self.stale.get(at..at + 16)
             && let Ok(bytes) = <[u8; 16]>::try_from(bytemuck::cast_slice::<bool, u8>(flags))
         {
@@ -380,9 +380,7 @@ impl<'a> Earlier<'a> {
                 _ => {}
             }
         }
-        (0..len as u32).fold(0, |bits, j| {
-            bits | (u32::from(self.is_stale(first + j)) << j)
-        })
+        self.stale_lanes(ids)
     }
 
     /// Appends `old`'s entries from vertex `first` to vertex `last` (both included) to

@@ -325,7 +325,7 @@ impl pulp::WithSimd for Gather<'_> {
                         *id = first + j as u32;
                     }
                     let ids = &ids[..chunk.len()];
-                    let stale = earlier.as_ref().map(|e| e.stale_run(first, chunk.len()));
+                    let stale = earlier.as_ref().map(|e| e.stale_run(ids));
                     let source = Source::Load(chunk);
                     weigh_group(
                         influence,
@@ -377,43 +377,31 @@ fn weigh_group(
     source: Source<'_>,
     mask: &mut Mask,
 ) {
-    let (Some(e), Some(stale)) = (earlier, stale) else {
-        let w = influence.weights(&source.lanes());
-        // Most groups of a small volume's mask are outside it: a group of no positive
-        // weight appends nothing, and the lane loop is skipped.
-        if w.simd_gt(Lane::ZERO).any() {
-            push_positive(ids, &w, mask);
+    if let (Some(e), Some(stale)) = (&mut *earlier, stale) {
+        if stale == 0 {
+            // Nothing moved: the group's earlier entries stay as they are.
+            let first = clean.map_or(ids[0], |(f, _)| f);
+            *clean = Some((first, ids[ids.len() - 1]));
+            return;
         }
-        return;
-    };
-    let (first, last) = (ids[0], ids[ids.len() - 1]);
-    if stale == 0 {
-        // Nothing moved: the group's earlier entries stay as they are.
-        *clean = Some((clean.map_or(first, |(f, _)| f), last));
-        return;
-    }
-    if let Some((f, l)) = clean.take() {
-        e.copy_run(f, l, mask);
-    }
-    let w = influence.weights(&source.lanes());
-    if stale.count_ones() as usize == ids.len() {
-        // Everything moved: the fresh weights alone (the group's earlier entries are passed
-        // over by the next lookup).
-        if w.simd_gt(Lane::ZERO).any() {
-            push_positive(ids, &w, mask);
+        if let Some((f, l)) = clean.take() {
+            e.copy_run(f, l, mask);
         }
-        return;
     }
-    for (j, (&i, &w)) in ids.iter().zip(w.as_array()).enumerate() {
-        let w = if stale & (1 << j) == 0 {
-            e.weight(i)
-        } else {
-            w
-        };
-        if w > 0.0 {
-            mask.indices.push(i);
-            mask.weights.push(w);
+    let mut w = influence.weights(&source.lanes());
+    if let (Some(e), Some(stale)) = (earlier, stale) {
+        // The lanes that did not move keep their earlier weights (the earlier entries of
+        // those that moved are passed over by the next lookup).
+        for (j, &i) in ids.iter().enumerate() {
+            if stale & (1 << j) == 0 {
+                w.0[j] = e.weight(i);
+            }
         }
+    }
+    // Most groups of a small volume's mask are outside it: a group of no positive weight
+    // appends nothing, and the lane loop is skipped.
+    if w.simd_gt(Lane::ZERO).any() {
+        push_positive(ids, &w, mask);
     }
 }
 

@@ -369,20 +369,18 @@ impl Dirty {
         // In parallel chunks (each owns the flags of its vertices): the change of the count
         // and the vertices added, merged in chunk order.
         let parts = map_chunks_at(&mut self.flag, idx, |k0, chunk, flags| {
-            let (mut removed, mut added) = (0_usize, Vec::new());
+            let mut tally = Tally::default();
             for (j, &v) in chunk.iter().enumerate() {
-                let f = flags.get(v);
-                if same_bits(a[k0 + j], b[k0 + j]) {
-                    removed += usize::from(*f);
-                    *f = false;
-                } else if !*f {
-                    *f = true;
-                    added.push(v);
-                }
+                tally.mark(flags.get(v), v, !same_bits(a[k0 + j], b[k0 + j]), true);
             }
-            (removed, added)
+            tally
         });
-        for (removed, added) in parts {
+        self.absorb(parts);
+    }
+
+    /// Takes the changes counted by parallel chunks, in chunk order.
+    fn absorb(&mut self, parts: Vec<Tally>) {
+        for Tally { removed, added } in parts {
             self.count = self.count - removed + added.len();
             self.list.extend(added);
         }
@@ -413,18 +411,9 @@ impl Dirty {
             let hi = b.get(k0 + chunk.len()).map_or(n, |&v| v as usize);
             let i1 = a.partition_point(|&v| (v as usize) < hi);
             let mut i = a[..i1].partition_point(|&v| v < lo);
-            let (mut removed, mut added) = (0_usize, Vec::new());
+            let mut tally = Tally::default();
             let mut mark = |v: u32, differs: bool, settles: bool| {
-                let f = flags.get(v);
-                if differs {
-                    if !*f {
-                        *f = true;
-                        added.push(v);
-                    }
-                } else if settles && *f {
-                    *f = false;
-                    removed += 1;
-                }
+                tally.mark(flags.get(v), v, differs, settles);
             };
             let mut j = 0;
             while i < i1 || j < chunk.len() {
@@ -447,12 +436,9 @@ impl Dirty {
                     (_, None) => break,
                 }
             }
-            (removed, added)
+            tally
         });
-        for (removed, added) in parts {
-            self.count = self.count - removed + added.len();
-            self.list.extend(added);
-        }
+        self.absorb(parts);
     }
 
     /// Both evaluations went through a stage (`old`, `new`) after [`Dirty::advance_old`]
@@ -475,6 +461,29 @@ impl Dirty {
                     j += 1;
                 }
             }
+        }
+    }
+}
+
+/// The changes a parallel chunk made to the flags of [`Dirty`]: how many it cleared and the
+/// vertices it set.
+#[derive(Default)]
+struct Tally {
+    removed: usize,
+    added: Vec<u32>,
+}
+
+impl Tally {
+    /// Sets flag `f` of vertex `v` when `differs`; otherwise clears it when `settles`.
+    fn mark(&mut self, f: &mut bool, v: u32, differs: bool, settles: bool) {
+        if differs {
+            if !*f {
+                *f = true;
+                self.added.push(v);
+            }
+        } else if settles && *f {
+            *f = false;
+            self.removed += 1;
         }
     }
 }
