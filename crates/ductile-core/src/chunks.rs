@@ -156,11 +156,11 @@ impl<'a, B: Slotted> Reuse<'a, B> {
 }
 
 /// Calls `f(k, &mut values[indices[k]])` for every `k`. When `indices` has at least
-/// [`PARALLEL_COPY_THRESHOLD`] entries and is strictly ascending (as a [`Mask`]'s indices are), the
-/// calls run in parallel chunks of [`CHUNK`] entries, each owning a disjoint range of
-/// `values`; otherwise in order. Each element sees the same single call either way, so a
-/// per-element `f` gives the same bits. Indices must be in range (panics otherwise, like
-/// indexing).
+/// [`PARALLEL_COPY_THRESHOLD`] entries and is strictly ascending (as an influence mask's
+/// indices are), the calls run in parallel chunks of [`CHUNK`] entries, each owning a
+/// disjoint range of `values`; otherwise in order. Each element sees the same single call
+/// either way, so a per-element `f` gives the same bits. Indices must be in range (panics
+/// otherwise, like indexing).
 pub fn for_each_at<T: Send>(
     values: &mut [T],
     indices: &[u32],

@@ -596,7 +596,7 @@ impl PreparedLattice {
 
     /// Deforms `active` vertices of `positions` into `out`. Lattices with the same number of
     /// basis functions (2 to 8) on every axis go through the block kernels (a point per SIMD
-    /// lane, [`simd`]); others point by point.
+    /// lane, the `simd` module); others point by point.
     pub fn deform_slice(&self, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
         if self.deform_slice_blocks(positions, active, out) {
             return;

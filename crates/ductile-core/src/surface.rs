@@ -338,7 +338,7 @@ const UNPROJECTED: u32 = u32::MAX - 1;
 
 /// Bind of a [`ShapeSurfaceTool`]: `(u₁, u₂, u₃)` per active vertex, in the order of the
 /// active list, and per welded vertex its slot (`u32::MAX` where it was not active,
-/// [`UNPROJECTED`] where it does not project).
+/// `u32::MAX - 1` where it does not project).
 #[derive(Debug, Clone)]
 pub struct SurfaceBind {
     knots: [KnotVector; 2],

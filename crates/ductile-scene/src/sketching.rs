@@ -2,7 +2,7 @@
 //! (Kho & Garland 2005), with a preview of its region of interest while drawing.
 //!
 //! * The **reference stroke** is projected onto the layer's input mesh
-//!   ([`project_stroke`](ductile_core::sketch::stroke::project_stroke) for a bend, the joint
+//!   ([`ductile_core::sketch::stroke::project_stroke`] for a bend, the joint
 //!   curve inside the mesh for a twist) and gives the partition (cutting planes at its ends,
 //!   §4.2) and the skinning `s(v)` shown as a blue-to-red ramp ([`preview`]).
 //! * A **cut line** (two points on screen) splits the region with a minimum cut (§4.2.1) and
