@@ -996,7 +996,8 @@ fn large_edits_patch_the_output_in_blocks_exactly() {
 /// as the three passes it replaces (advance the old stage, advance the new, settle the
 /// common vertices): the same flags, count and members, on a mesh long enough that the
 /// merge runs in several parallel chunks, and with vertices of the old stage below the
-/// new stage's first and above its last.
+/// new stage's first and above its last; then on one chunk, empty stages and a vertex past
+/// the flags.
 #[test]
 fn a_merged_settle_is_the_three_passes() {
     let n = 5 * ductile_core::chunks::CHUNK + 777;
@@ -1036,15 +1037,28 @@ fn a_merged_settle_is_the_three_passes() {
             written,
         }
     };
-    for round in 0..4 {
-        let old_idx: Vec<u32> = (0..n as u32).filter(|&v| v < 300 || r() % 4 != 0).collect();
-        let new_idx: Vec<u32> = (300..n as u32 - 200).filter(|_| r() % 3 != 0).collect();
+    let mut cases: Vec<(Vec<u32>, Vec<u32>)> = (0..4)
+        .map(|_| {
+            let old: Vec<u32> = (0..n as u32).filter(|&v| v < 300 || r() % 4 != 0).collect();
+            let new: Vec<u32> = (300..n as u32 - 200).filter(|_| r() % 3 != 0).collect();
+            (old, new)
+        })
+        .collect();
+    let every: Vec<u32> = (0..n as u32).collect();
+    // One chunk of the new stage (run in place) against an old stage over the whole mesh.
+    cases.push((every.clone(), (1000..1100).collect()));
+    // An empty new stage, then an empty old one.
+    cases.push((every.clone(), Vec::new()));
+    cases.push((Vec::new(), every.clone()));
+    // A vertex past the flags: the three passes themselves run (they ignore it).
+    cases.push((every.clone(), (0..n as u32 + 3).step_by(2).collect()));
+    for (round, (old_idx, new_idx)) in cases.into_iter().enumerate() {
         let old = stage(old_idx, &mut r);
         let new = stage(new_idx, &mut r);
         let mut reference = Dirty::default();
         reference.reset(n);
         for v in 0..n as u32 {
-            if r() % 5 == round {
+            if r() % 5 == round as u32 % 5 {
                 reference.insert(v);
             }
         }
