@@ -240,7 +240,10 @@ impl SampledAxis {
         let (r0, r1) = (self.rotations[j], self.rotations[j + 1]);
         let r = if r0 == r1 { r0 } else { r0.slerp(r1, f) };
         let q = self.twist[j] + (self.twist[j + 1] - self.twist[j]) * f;
-        let s = self.scale[j] + (self.scale[j + 1] - self.scale[j]) * f;
+        // As a weighted sum, not `θ_j + (θ_{j+1} − θ_j) f`: both terms are non-negative, so
+        // between two valid (positive) scales the result is positive, where the difference
+        // form cancels to 0 at `f = 1` between 10⁶ and 10⁻⁶ and the bind then divides by it.
+        let s = self.scale[j] * (1.0 - f) + self.scale[j + 1] * f;
         // No twist (the common case): `R W = R`, without the sine and cosine of 0.
         let rw = if q == 0.0 {
             Mat3::from_quat(r)
@@ -638,6 +641,29 @@ mod tests {
         let tool = AxialTool::new(rest, 1.0);
         for (p, o) in pts.iter().zip(run(&tool, &pts)) {
             assert!(p.distance(o) < 1e-5);
+        }
+    }
+
+    /// The extreme valid scales at the two ends of a segment: the interpolated scale at the
+    /// far end is that end's 10⁻⁶, not a cancellation to 0, so the points on the axis there
+    /// stay finite (found by the finite-output property test).
+    #[test]
+    fn extreme_end_scales_keep_the_axis_end_finite() {
+        let mut rest = line(2, Vec3::ZERO, Vec3::new(0.0, 0.0, 1.762_016));
+        rest[0].scale = 1e6;
+        rest[1].scale = 1e-6;
+        let mut deformed = rest.clone();
+        for p in &mut deformed {
+            p.scale = 0.05;
+        }
+        let tool = AxialTool {
+            deformed,
+            falloff: Falloff::None,
+            ..AxialTool::new(rest.clone(), 0.05)
+        };
+        let pts = [rest[1].position, rest[0].position, Vec3::new(0.0, 0.0, 0.9)];
+        for (p, o) in pts.iter().zip(run(&tool, &pts)) {
+            assert!(o.is_finite(), "{p} went to {o}");
         }
     }
 
