@@ -428,10 +428,14 @@ impl BasisPieces {
     /// span after it, as in `KnotVector::span`).
     #[inline(always)]
     fn piece_of(&self, t: f32) -> (usize, f32, f32) {
+        // Through `u32`, whose conversions from and to `f32` are one instruction each (those of
+        // `usize` are several): the table budget keeps the count far below `2²⁴`, where both
+        // are exact, and `scaled ∈ [0, m]` or NaN truncates to the same `k` either way.
+        let m = self.count as u32;
         let t = t.clamp(0.0, 1.0);
-        let scaled = t * self.count as f32;
-        let k = (scaled as usize).min(self.count - 1);
-        let u = (scaled - k as f32).clamp(0.0, 1.0);
+        let scaled = t * m as f32;
+        let k = (scaled as u32).min(m - 1) as usize;
+        let u = (scaled - k as u32 as f32).clamp(0.0, 1.0);
         if u >= 1.0 && k + 1 < self.count {
             (k + 1, 0.0, t)
         } else {
@@ -453,16 +457,28 @@ impl BasisPieces {
         // Every function at once, each lane doing the scalar loop's operations below.
         let uu = Vec4::splat(u);
         let (mut y, mut dy) = (Vec4::ZERO, Vec4::ZERO);
-        for &a in self.rows[k * (p + 1)..(k + 1) * (p + 1)].iter().rev() {
-            dy = dy * uu + y;
-            y = y * uu + a;
+        let rows = &self.rows[k * (p + 1)..(k + 1) * (p + 1)];
+        // Cubic (the Add menu's surfaces) with a loop of fixed length, which the compiler
+        // unrolls; the same operations as the loop of run-time length below.
+        if let Ok(rows) = <&[Vec4; 4]>::try_from(rows) {
+            for &a in rows.iter().rev() {
+                dy = dy * uu + y;
+                y = y * uu + a;
+            }
+        } else {
+            for &a in rows.iter().rev() {
+                dy = dy * uu + y;
+                y = y * uu + a;
+            }
         }
         if t >= 1.0 {
             let mut end = [0.0; 4];
-            end[..=p].copy_from_slice(&self.end);
+            for (e, &v) in end.iter_mut().zip(&self.end) {
+                *e = v;
+            }
             y = Vec4::from_array(end);
         }
-        Some((self.firsts[k] as usize, y, dy * self.count as f32))
+        Some((self.firsts[k] as usize, y, dy * self.count as u32 as f32))
     }
 
     /// The `p + 1` non-zero functions at `t` (clamped to `[0, 1]`) and their derivatives
