@@ -428,9 +428,9 @@ impl BasisPieces {
     /// span after it, as in `KnotVector::span`).
     #[inline(always)]
     fn piece_of(&self, t: f32) -> (usize, f32, f32) {
-        // Through `u32`, whose conversions from and to `f32` are one instruction each (those of
-        // `usize` are several): the table budget keeps the count far below `2²⁴`, where both
-        // are exact, and `scaled ∈ [0, m]` or NaN truncates to the same `k` either way.
+        // Through `u32`, whose conversions from and to `f32` take fewer instructions than
+        // those of `usize`: the table budget keeps the count at most `2²⁰`, where both are
+        // exact, and `scaled ∈ [0, m]` or NaN truncates to the same `k` either way.
         let m = self.count as u32;
         let t = t.clamp(0.0, 1.0);
         let scaled = t * m as f32;

@@ -223,7 +223,8 @@ fn piece_bases_into(
         && let (Some((first_u, nu, du)), Some((first_v, nv, dv))) =
             (a.values_and_derivatives4(u), b.values_and_derivatives4(v))
     {
-        // Bicubic (the Add menu's, the only case with 16 values): four whole vectors.
+        // Bicubic (the Add menu's; of degrees up to 3, the only one with 16 values): four
+        // whole vectors.
         if let Ok(out) = <&mut [f32; 16]>::try_from(&mut *out) {
             for (o, x) in out.chunks_exact_mut(4).zip([nu, du, nv, dv]) {
                 o.copy_from_slice(&x.to_array());

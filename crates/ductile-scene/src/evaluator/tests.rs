@@ -1050,7 +1050,9 @@ fn a_merged_settle_is_the_three_passes() {
     // An empty new stage, then an empty old one.
     cases.push((every.clone(), Vec::new()));
     cases.push((Vec::new(), every.clone()));
-    // A vertex past the flags: the three passes themselves run (they ignore it).
+    // A vertex past the flags: the three passes themselves run (they ignore it), so this
+    // compares them with themselves; it fails if the guard goes, when the in-place merge
+    // would index the flags past their end.
     cases.push((every.clone(), (0..n as u32 + 3).step_by(2).collect()));
     for (round, (old_idx, new_idx)) in cases.into_iter().enumerate() {
         let old = stage(old_idx, &mut r);
