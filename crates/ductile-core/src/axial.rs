@@ -644,6 +644,20 @@ mod tests {
         }
     }
 
+    /// A tool on the unmoved axis `rest` of radius `radius`, every deformed point's scale
+    /// `scale`, without falloff.
+    fn scaled(rest: Vec<AxisPoint>, scale: f32, radius: f32) -> AxialTool {
+        let mut deformed = rest.clone();
+        for p in &mut deformed {
+            p.scale = scale;
+        }
+        AxialTool {
+            deformed,
+            falloff: Falloff::None,
+            ..AxialTool::new(rest, radius)
+        }
+    }
+
     /// The extreme valid scales at the two ends of a segment: the interpolated scale at the
     /// far end is that end's 10⁻⁶, not a cancellation to 0, so the points on the axis there
     /// stay finite (found by the finite-output property test).
@@ -652,15 +666,7 @@ mod tests {
         let mut rest = line(2, Vec3::ZERO, Vec3::new(0.0, 0.0, 1.762_016));
         rest[0].scale = 1e6;
         rest[1].scale = 1e-6;
-        let mut deformed = rest.clone();
-        for p in &mut deformed {
-            p.scale = 0.05;
-        }
-        let tool = AxialTool {
-            deformed,
-            falloff: Falloff::None,
-            ..AxialTool::new(rest.clone(), 0.05)
-        };
+        let tool = scaled(rest.clone(), 0.05, 0.05);
         let pts = [rest[1].position, rest[0].position, Vec3::new(0.0, 0.0, 0.9)];
         for (p, o) in pts.iter().zip(run(&tool, &pts)) {
             assert!(o.is_finite(), "{p} went to {o}");
@@ -669,16 +675,7 @@ mod tests {
 
     #[test]
     fn scale_scales_across_the_axis_only() {
-        let rest = line(2, Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0));
-        let mut deformed = rest.clone();
-        for p in &mut deformed {
-            p.scale = 2.0;
-        }
-        let tool = AxialTool {
-            deformed,
-            falloff: Falloff::None,
-            ..AxialTool::new(rest, 1.0)
-        };
+        let tool = scaled(line(2, Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0)), 2.0, 1.0);
         let pts = [Vec3::new(0.1, 0.2, 0.5), Vec3::new(-0.3, 0.0, 0.25)];
         let out = run(&tool, &pts);
         assert!(out[0].distance(Vec3::new(0.2, 0.4, 0.5)) < 1e-6);

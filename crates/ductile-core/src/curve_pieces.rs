@@ -455,22 +455,13 @@ impl BasisPieces {
         let p = self.degree;
         let (k, u, t) = self.piece_of(t);
         // Every function at once, each lane doing the scalar loop's operations below.
-        let uu = Vec4::splat(u);
-        let (mut y, mut dy) = (Vec4::ZERO, Vec4::ZERO);
         let rows = &self.rows[k * (p + 1)..(k + 1) * (p + 1)];
-        // Cubic (the Add menu's surfaces) with a loop of fixed length, which the compiler
-        // unrolls; the same operations as the loop of run-time length below.
-        if let Ok(rows) = <&[Vec4; 4]>::try_from(rows) {
-            for &a in rows.iter().rev() {
-                dy = dy * uu + y;
-                y = y * uu + a;
-            }
-        } else {
-            for &a in rows.iter().rev() {
-                dy = dy * uu + y;
-                y = y * uu + a;
-            }
-        }
+        // Cubic (the Add menu's surfaces) with a length known here, so that the inlined loop
+        // is unrolled; the same operations either way.
+        let (mut y, dy) = match <&[Vec4; 4]>::try_from(rows) {
+            Ok(rows) => horner_with_derivative(rows, u),
+            Err(_) => horner_with_derivative(rows, u),
+        };
         if t >= 1.0 {
             let mut end = [0.0; 4];
             for (e, &v) in end.iter_mut().zip(&self.end) {
@@ -516,6 +507,19 @@ impl BasisPieces {
         }
         self.firsts[k] as usize
     }
+}
+
+/// `(Σⱼ rⱼ uʲ, Σⱼ j rⱼ uʲ⁻¹)` of the rows `rⱼ` of every function at once, by Horner's rule
+/// for the value and its derivative together.
+#[inline(always)]
+fn horner_with_derivative(rows: &[Vec4], u: f32) -> (Vec4, Vec4) {
+    let uu = Vec4::splat(u);
+    let (mut y, mut dy) = (Vec4::ZERO, Vec4::ZERO);
+    for &a in rows.iter().rev() {
+        dy = dy * uu + y;
+        y = y * uu + a;
+    }
+    (y, dy)
 }
 
 /// `Σⱼ cⱼ uʲ` by Horner's rule. Separate products and sums, not `mul_add`: the baseline

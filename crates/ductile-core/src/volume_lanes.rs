@@ -325,32 +325,22 @@ impl pulp::WithSimd for Gather<'_> {
                         *id = first + j as u32;
                     }
                     let ids = &ids[..chunk.len()];
-                    let stale = earlier.as_ref().map(|e| e.stale_run(ids));
+                    let reuse = earlier.as_mut().map(|e| {
+                        let stale = e.stale_run(ids);
+                        (e, stale)
+                    });
                     let source = Source::Load(chunk);
-                    weigh_group(
-                        influence,
-                        &mut earlier,
-                        &mut clean,
-                        ids,
-                        stale,
-                        source,
-                        &mut mask,
-                    );
+                    weigh_group(influence, reuse, &mut clean, ids, source, &mut mask);
                 }
             }
             Ids::List(ids) => {
                 for chunk in ids.chunks(LANES) {
-                    let stale = earlier.as_ref().map(|e| e.stale_lanes(chunk));
+                    let reuse = earlier.as_mut().map(|e| {
+                        let stale = e.stale_lanes(chunk);
+                        (e, stale)
+                    });
                     let source = Source::Gather(self.positions, chunk);
-                    weigh_group(
-                        influence,
-                        &mut earlier,
-                        &mut clean,
-                        chunk,
-                        stale,
-                        source,
-                        &mut mask,
-                    );
+                    weigh_group(influence, reuse, &mut clean, chunk, source, &mut mask);
                 }
             }
         }
@@ -363,41 +353,43 @@ impl pulp::WithSimd for Gather<'_> {
 
 /// One lane group of the kernel: weighs `ids` (the positions from `source`, read only when
 /// some vertex needs a fresh weight) and appends those of positive weight to `mask`. With an
-/// earlier mask, `stale` has bit `j` set when lane `j`'s vertex is stale; a group without a
+/// earlier mask, `reuse` holds it and `stale`, bit `j` set when lane `j`'s vertex is
+/// stale; a group without a
 /// stale vertex only extends the run `clean`, whose earlier entries are appended when a
 /// group with one comes (or by the caller at the end). A function, not a closure, so that
 /// it is compiled with the kernel's target features.
 #[inline(always)]
 fn weigh_group(
     influence: &LaneInfluence,
-    earlier: &mut Option<Earlier<'_>>,
+    reuse: Option<(&mut Earlier<'_>, u32)>,
     clean: &mut Option<(u32, u32)>,
     ids: &[u32],
-    stale: Option<u32>,
     source: Source<'_>,
     mask: &mut Mask,
 ) {
-    if let (Some(e), Some(stale)) = (&mut *earlier, stale) {
-        if stale == 0 {
+    let w = match reuse {
+        Some((_, 0)) => {
             // Nothing moved: the group's earlier entries stay as they are.
             let first = clean.map_or(ids[0], |(f, _)| f);
             *clean = Some((first, ids[ids.len() - 1]));
             return;
         }
-        if let Some((f, l)) = clean.take() {
-            e.copy_run(f, l, mask);
-        }
-    }
-    let mut w = influence.weights(&source.lanes());
-    if let (Some(e), Some(stale)) = (earlier, stale) {
-        // The lanes that did not move keep their earlier weights (the earlier entries of
-        // those that moved are passed over by the next lookup).
-        for (j, &i) in ids.iter().enumerate() {
-            if stale & (1 << j) == 0 {
-                w.0[j] = e.weight(i);
+        Some((e, stale)) => {
+            if let Some((f, l)) = clean.take() {
+                e.copy_run(f, l, mask);
             }
+            let mut w = influence.weights(&source.lanes());
+            // The lanes that did not move keep their earlier weights (the earlier entries
+            // of those that moved are passed over by the next lookup).
+            for (j, &i) in ids.iter().enumerate() {
+                if stale & (1 << j) == 0 {
+                    w.0[j] = e.weight(i);
+                }
+            }
+            w
         }
-    }
+        None => influence.weights(&source.lanes()),
+    };
     // Most groups of a small volume's mask are outside it: a group of no positive weight
     // appends nothing, and the lane loop is skipped.
     if w.simd_gt(Lane::ZERO).any() {
