@@ -28,6 +28,9 @@
 //! is fused, so every register width gives the same bits. Every scalar value this module
 //! computes (`S_ref`, [`HeightLimit::limit`], the anchors' `|X − V_min|^α`) goes through the
 //! same lane arithmetic, so a vertex gets the same bits whichever vertices share its lanes.
+//! Tools whose every `α` is 2 or 1 (no `ln`: the identikit's macros) and the search for
+//! `V_min` run the same operations in `simd`'s explicit register code instead, which the
+//! compiler cannot rearrange lane by lane; the bits are the lanes' (tested).
 
 use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Serialize};
@@ -39,6 +42,8 @@ use rayon::prelude::*;
 use crate::chunks::{CHUNK, PARALLEL_THRESHOLD};
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
 use crate::tool::{BindInput, Deformer, uniform_scale};
+
+mod simd;
 
 /// How a control point pushes the surface.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
@@ -504,8 +509,16 @@ impl pulp::WithSimd for Deform<'_> {
     type Output = ();
 
     #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _: S) {
+    fn with_simd<S: pulp::Simd>(self, s: S) {
         let (tool, bind, positions) = (self.tool, self.bind, self.positions);
+        if simd::supports(bind) {
+            let ids = match self.vertices {
+                Vertices::Active(active) => Some(active),
+                Vertices::All => None,
+            };
+            simd::deform(s, tool, bind, positions, ids, self.out);
+            return;
+        }
         match self.vertices {
             Vertices::Active(active) => {
                 for (o, a) in self.out.chunks_mut(LANES).zip(active.chunks(LANES)) {
@@ -525,15 +538,13 @@ impl pulp::WithSimd for Deform<'_> {
 /// are searched in one parallel pass over chunks whose winners are combined in order with
 /// the same strict comparison, so the result is the serial one.
 fn closest(positions: &[Vec3], active: &[u32], xs: &[Vec3]) -> Vec<u32> {
-    // One sweep over the chunk for all points, a lane group of vertices at a time: the
-    // distances `|V − X|²` (glam's `distance_squared` arithmetic) of the group, and only
-    // when one beats the best so far, the group's lanes in order with the same strict test.
-    let centres: Vec<Lanes3> = xs.iter().map(|&x| Lanes3::splat(x)).collect();
+    // One sweep over the chunk for all points, a block of vertices at a time (see
+    // `simd::nearest`).
     let search = |chunk: &[u32]| -> Vec<(u32, f32)> {
         pulp::Arch::new().dispatch(Nearest {
             positions,
             chunk,
-            centres: &centres,
+            centres: xs,
         })
     };
     if active.len() < PARALLEL_THRESHOLD {
@@ -556,29 +567,15 @@ fn closest(positions: &[Vec3], active: &[u32], xs: &[Vec3]) -> Vec<u32> {
 struct Nearest<'a> {
     positions: &'a [Vec3],
     chunk: &'a [u32],
-    centres: &'a [Lanes3],
+    centres: &'a [Vec3],
 }
 
 impl pulp::WithSimd for Nearest<'_> {
     type Output = Vec<(u32, f32)>;
 
     #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _: S) -> Self::Output {
-        let mut best = vec![(self.chunk[0], f32::INFINITY); self.centres.len()];
-        for group in self.chunk.chunks(LANES) {
-            let v = Lanes3::gather(self.positions, group);
-            for (b, c) in best.iter_mut().zip(self.centres) {
-                let d = v.sub(*c).length_squared();
-                if d.simd_lt(Lane::splat(b.1)).any() {
-                    for (&i, &d) in group.iter().zip(d.as_array()) {
-                        if d < b.1 {
-                            *b = (i, d);
-                        }
-                    }
-                }
-            }
-        }
-        best
+    fn with_simd<S: pulp::Simd>(self, s: S) -> Self::Output {
+        simd::nearest(s, self.positions, self.chunk, self.centres)
     }
 }
 
@@ -926,6 +923,85 @@ mod tests {
         );
     }
 
+    /// The register kernel (`α` of 2 or 1) gives every vertex the bits of the sixteen-float
+    /// lanes' `deform_lanes`, dispatched (AVX2 here) and in scalar code, for every height
+    /// limit: on 701 vertices (several stages, a partial block) spread so that `exp` meets
+    /// its common case, its underflow to 0 and the subnormal band between, which the
+    /// register kernel hands to the lanes' `exp`.
+    #[test]
+    fn the_register_kernel_gives_the_lanes_bits() {
+        let positions: Vec<Vec3> = (0..701)
+            .map(|i| {
+                let t = i as f32 * 0.013;
+                Vec3::new(3.0 * t.sin().abs(), (t * 2.3).cos() + 1.0, t * 0.4)
+            })
+            .collect();
+        let active: Vec<u32> = (0..701).filter(|i| i % 9 != 4).collect();
+        // The first vertex whose bits differ, if any.
+        let differ = |a: &[Vec3], b: &[Vec3]| {
+            a.iter()
+                .zip(b)
+                .position(|(p, q)| p.to_array().map(f32::to_bits) != q.to_array().map(f32::to_bits))
+        };
+        let heights = [
+            None,
+            Some(HeightLimit::Above { theta: 0.4 }),
+            Some(HeightLimit::Below { theta: 0.3 }),
+            Some(HeightLimit::Both {
+                below: 0.2,
+                above: 0.6,
+            }),
+        ];
+        let mut bands = [false; 3];
+        for alpha in [2.0, 1.0] {
+            let mut a = ControlPoint::basic(Vec3::new(0.5, 1.2, 0.3), 0.4, alpha, 0.15);
+            a.mode = PointMode::Virtual;
+            let b = ControlPoint::basic(Vec3::new(2.5, 0.2, 2.0), -0.3, alpha, 0.25);
+            let mut c = ControlPoint::basic(Vec3::new(1.5, 1.0, 1.0), 0.2, alpha, 0.5);
+            c.mode = PointMode::Directional {
+                reference: Vec3::new(1.4, 1.1, 0.8),
+            };
+            for height in heights {
+                let mut tool = FfsdTool::new(vec![a, b, c]);
+                tool.height = height;
+                let bind = bound(&tool, &positions, &active);
+                assert!(simd::supports(&bind));
+                for p in &bind.points {
+                    for &i in &active {
+                        let d2 = (p.centre - positions[i as usize]).length_squared();
+                        let pow = if p.half_alpha == 1.0 { d2 } else { d2.sqrt() };
+                        let x = -(pow - p.anchor_pow) * p.inv_two_eps2;
+                        bands[usize::from(x < -87.0) + usize::from(x < -103.63)] = true;
+                    }
+                }
+                let mut lanes = vec![Vec3::ZERO; active.len()];
+                for (o, group) in lanes.chunks_mut(LANES).zip(active.chunks(LANES)) {
+                    tool.deform_lanes(&bind, Lanes3::gather(&positions, group), o);
+                }
+                let mut dispatched = vec![Vec3::ZERO; active.len()];
+                tool.deform(&bind, &positions, &active, &mut dispatched);
+                let mut scalar = vec![Vec3::ZERO; active.len()];
+                pulp::WithSimd::with_simd(
+                    Deform {
+                        tool: &tool,
+                        bind: &bind,
+                        positions: &positions,
+                        vertices: Vertices::Active(&active),
+                        out: &mut scalar,
+                    },
+                    pulp::Scalar::new(),
+                );
+                assert_eq!(differ(&dispatched, &lanes), None, "α {alpha}, {height:?}");
+                assert_eq!(differ(&scalar, &lanes), None, "α {alpha}, {height:?}");
+                let gathered: Vec<Vec3> = active.iter().map(|&i| positions[i as usize]).collect();
+                let mut inputs = vec![Vec3::ZERO; active.len()];
+                tool.deform_inputs(&bind, &gathered, &mut inputs);
+                assert_eq!(differ(&inputs, &lanes), None, "α {alpha}, {height:?}");
+            }
+        }
+        assert_eq!(bands, [true; 3], "exp's three cases met");
+    }
+
     #[test]
     fn lanes_give_each_vertex_the_same_bits_in_any_group() {
         let positions: Vec<Vec3> = (0..37)
@@ -958,6 +1034,42 @@ mod tests {
         let lanes = h.limit_lanes(Lanes3::splat(d), 0.6);
         assert_eq!(h.limit(d, 0.6), lanes.lane(7));
         assert!((h.limit(d, 0.6).length() - 0.3).abs() < 1e-6);
+    }
+
+    /// The nearest active vertex of each centre is the first of the least
+    /// `distance_squared`, as a plain loop finds it, on lists of every length around the
+    /// register blocks and stages (vertices repeated, so that ties occur).
+    #[test]
+    fn closest_is_the_first_nearest_of_a_plain_loop() {
+        let positions: Vec<Vec3> = (0..600)
+            .map(|i| {
+                let t = (i % 150) as f32 * 0.05;
+                Vec3::new(t.cos(), t.sin(), (i / 150) as f32 * 0.01)
+            })
+            .collect();
+        let xs = [
+            Vec3::new(0.2, 0.9, 0.0),
+            Vec3::new(-1.0, 0.05, 0.02),
+            Vec3::ZERO,
+            Vec3::new(3.0, -2.0, 1.0),
+        ];
+        for len in [1, 7, 15, 16, 17, 31, 33, 255, 256, 257, 511, 600] {
+            let active: Vec<u32> = (0..600).rev().take(len).rev().collect();
+            let plain: Vec<u32> = xs
+                .iter()
+                .map(|x| {
+                    let mut best = (active[0], f32::INFINITY);
+                    for &i in &active {
+                        let d = positions[i as usize].distance_squared(*x);
+                        if d < best.1 {
+                            best = (i, d);
+                        }
+                    }
+                    best.0
+                })
+                .collect();
+            assert_eq!(closest(&positions, &active, &xs), plain, "{len} vertices");
+        }
     }
 
     #[test]

@@ -337,7 +337,7 @@ impl Lane {
 }
 
 /// The coefficients of `exp`'s polynomial (`1/k!` from `k = 2`).
-const EXP_P: [f32; 6] = [
+pub(crate) const EXP_P: [f32; 6] = [
     1.0 / 2.0,
     1.0 / 6.0,
     1.0 / 24.0,
@@ -362,10 +362,10 @@ const LN_P: [f32; 9] = [
 
 /// `ln 2` in two parts (fdlibm's split, as `wide` writes it): `LN2_HI = 0.693359375` has few
 /// mantissa bits, so `r · LN2_HI` is exact for the `r` of a range reduction.
-const LN2_HI: f32 = 355.0 / 512.0;
+pub(crate) const LN2_HI: f32 = 355.0 / 512.0;
 /// `ln 2 − LN2_HI`, as `wide` writes it.
 #[allow(clippy::excessive_precision)]
-const LN2_LO: f32 = -2.12194440e-4;
+pub(crate) const LN2_LO: f32 = -2.12194440e-4;
 
 /// The quiet NaN `wide` returns from `exp` and `ln`.
 const NAN: Lane = Lane([f32::from_bits(0x7FC0_0101); LANES]);

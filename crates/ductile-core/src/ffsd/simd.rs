@@ -1,0 +1,477 @@
+//! The FFSD deformation `P = V + limit(Σₖ dₖ(V))` and the search for each point's nearest
+//! vertex `V_min`, on blocks of vertices, two SIMD registers per value, in [`pulp`]'s
+//! explicit vector operations (16 vertices where the CPU has AVX2, 8 with SSE, 2 in scalar
+//! code). Two independent registers per step keep the long chain of `exp` from stalling the
+//! core on each operation's latency.
+//!
+//! The same kernels on [`crate::lane`]'s sixteen-float lanes (plain loops the compiler
+//! vectorises) came out of the compiler partly lane by lane: it vectorised the three
+//! coordinates of one vertex, with a shuffle per lane, instead of one coordinate of eight
+//! vertices. On 1,600 vertices, one thread (2026-11-27): 6.6 → 5.3 ns per vertex for one
+//! point, 4.8 → 3.4 ns per vertex and point for two, 4.0 → 2.5 ns for four. This code states
+//! every register operation and takes the lanes' operations in the lanes' order (no fused
+//! multiply–add), so every vertex gets the bits of [`super::FfsdTool::deform_lanes`], which
+//! the tests check at the dispatched width and in scalar code.
+//!
+//! `exp` is the lanes' [`crate::lane::Lane::exp`] where every lane of the block is in
+//! `[−87, 87]` (its range reduction and polynomial, `2ʳ` built in the exponent bits) or below
+//! `−103.63` (0); any other block (subnormal `2ʳ`, overflow, NaN) is handed to the lanes'
+//! `exp`, lane for lane the same function.
+
+use glam::Vec3;
+use pulp::Simd;
+
+use super::{FfsdBind, FfsdTool, HeightLimit};
+use crate::lane::{LANES, Lane};
+
+/// `ln 2` in two parts and `exp`'s polynomial, as [`crate::lane`] takes them.
+use crate::lane::{EXP_P, LN2_HI, LN2_LO};
+
+/// Two registers, operated on together (`two!`'s expression for register 0, then 1).
+type Two<T> = [T; 2];
+
+/// `[e(0), e(1)]` for an expression `e` of the register index (a macro, not a closure: a
+/// closure is compiled without the kernel's target features).
+macro_rules! two {
+    (|$i:ident| $e:expr) => {
+        [
+            {
+                let $i = 0;
+                $e
+            },
+            {
+                let $i = 1;
+                $e
+            },
+        ]
+    };
+}
+
+/// A block of vertices: their coordinates.
+#[derive(Clone, Copy)]
+struct Block<S: Simd> {
+    x: Two<S::f32s>,
+    y: Two<S::f32s>,
+    z: Two<S::f32s>,
+}
+
+/// The kernel's register operations on a [`pulp::Simd`] implementation.
+#[derive(Clone, Copy)]
+struct Ops<S: Simd>(S);
+
+impl<S: Simd> Ops<S> {
+    #[inline(always)]
+    fn splat(self, v: f32) -> Two<S::f32s> {
+        let r = self.0.splat_f32s(v);
+        [r, r]
+    }
+
+    #[inline(always)]
+    fn add(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::f32s> {
+        two!(|i| self.0.add_f32s(a[i], b[i]))
+    }
+
+    #[inline(always)]
+    fn sub(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::f32s> {
+        two!(|i| self.0.sub_f32s(a[i], b[i]))
+    }
+
+    #[inline(always)]
+    fn mul(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::f32s> {
+        two!(|i| self.0.mul_f32s(a[i], b[i]))
+    }
+
+    #[inline(always)]
+    fn div(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::f32s> {
+        two!(|i| self.0.div_f32s(a[i], b[i]))
+    }
+
+    #[inline(always)]
+    fn sqrt(self, a: Two<S::f32s>) -> Two<S::f32s> {
+        two!(|i| self.0.sqrt_f32s(a[i]))
+    }
+
+    /// `-a`: the sign bit flipped, as `f32`'s negation.
+    #[inline(always)]
+    fn neg(self, a: Two<S::f32s>) -> Two<S::f32s> {
+        let sign = self.0.splat_f32s(-0.0);
+        two!(|i| self.0.xor_f32s(a[i], sign))
+    }
+
+    #[inline(always)]
+    fn lt(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::m32s> {
+        two!(|i| self.0.less_than_f32s(a[i], b[i]))
+    }
+
+    #[inline(always)]
+    fn le(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::m32s> {
+        two!(|i| self.0.less_than_or_equal_f32s(a[i], b[i]))
+    }
+
+    #[inline(always)]
+    fn ge(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::m32s> {
+        two!(|i| self.0.greater_than_or_equal_f32s(a[i], b[i]))
+    }
+
+    #[inline(always)]
+    fn gt(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::m32s> {
+        two!(|i| self.0.greater_than_f32s(a[i], b[i]))
+    }
+
+    #[inline(always)]
+    fn eq(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::m32s> {
+        two!(|i| self.0.equal_f32s(a[i], b[i]))
+    }
+
+    #[inline(always)]
+    fn and(self, a: Two<S::m32s>, b: Two<S::m32s>) -> Two<S::m32s> {
+        two!(|i| self.0.and_m32s(a[i], b[i]))
+    }
+
+    #[inline(always)]
+    fn or(self, a: Two<S::m32s>, b: Two<S::m32s>) -> Two<S::m32s> {
+        two!(|i| self.0.or_m32s(a[i], b[i]))
+    }
+
+    #[inline(always)]
+    fn not(self, a: Two<S::m32s>) -> Two<S::m32s> {
+        two!(|i| self.0.not_m32s(a[i]))
+    }
+
+    /// `a` where `m`, else `b`.
+    #[inline(always)]
+    fn select(self, m: Two<S::m32s>, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::f32s> {
+        two!(|i| self.0.select_f32s(m[i], a[i], b[i]))
+    }
+
+    /// Whether every lane of `m` is set.
+    #[inline(always)]
+    fn all(self, m: Two<S::m32s>) -> bool {
+        let m = self.0.and_m32s(m[0], m[1]);
+        self.0.first_true_m32s(self.0.not_m32s(m)) == S::F32_LANES
+    }
+
+    /// `x² + y² + z²`, summed in that order (as [`crate::lane::Lanes3::length_squared`]).
+    #[inline(always)]
+    fn length_squared(self, b: Block<S>) -> Two<S::f32s> {
+        self.add(
+            self.add(self.mul(b.x, b.x), self.mul(b.y, b.y)),
+            self.mul(b.z, b.z),
+        )
+    }
+
+    #[inline(always)]
+    fn scale(self, b: Block<S>, k: Two<S::f32s>) -> Block<S> {
+        Block {
+            x: self.mul(b.x, k),
+            y: self.mul(b.y, k),
+            z: self.mul(b.z, k),
+        }
+    }
+
+    #[inline(always)]
+    fn select3(self, m: Two<S::m32s>, a: Block<S>, b: Block<S>) -> Block<S> {
+        Block {
+            x: self.select(m, a.x, b.x),
+            y: self.select(m, a.y, b.y),
+            z: self.select(m, a.z, b.z),
+        }
+    }
+
+    /// Rounded to the nearest integer, ties to even: below `2²³` in magnitude, adding and
+    /// taking away `±2²³` (the sign of the lane) rounds; above it every `f32` is an integer
+    /// ([`crate::lane::Lane`]'s `round_ties_even`).
+    #[inline(always)]
+    fn round_ties_even(self, x: Two<S::f32s>) -> Two<S::f32s> {
+        const TWO_23: f32 = 8_388_608.0;
+        let s = self.0;
+        let (sign, two_23) = (s.splat_u32s(0x8000_0000), s.splat_u32s(TWO_23.to_bits()));
+        let c = two!(|i| s
+            .transmute_f32s_u32s(s.or_u32s(s.and_u32s(s.transmute_u32s_f32s(x[i]), sign), two_23)));
+        let rounded = self.sub(self.add(x, c), c);
+        let small = self.lt(two!(|i| s.abs_f32s(x[i])), self.splat(TWO_23));
+        self.select(small, rounded, x)
+    }
+
+    /// `eˣ` in each lane, the bits of [`Lane::exp`].
+    #[inline(always)]
+    fn exp(self, x: Two<S::f32s>) -> Two<S::f32s> {
+        let s = self.0;
+        let normal = self.and(self.ge(x, self.splat(-87.0)), self.le(x, self.splat(87.0)));
+        let zero = self.lt(x, self.splat(-103.63));
+        if !self.all(self.or(normal, zero)) {
+            return exp_outside(s, x);
+        }
+        // `Lane::exp`'s common case: `r = round(x / ln 2)` in [−126, 126], so `2ʳ` is normal
+        // (`wide`'s `vm_pow2n` without its subnormal branch).
+        let r = self.round_ties_even(self.mul(x, self.splat(core::f32::consts::LOG2_E)));
+        let t = self.sub(x, self.mul(r, self.splat(LN2_HI)));
+        let t = self.sub(t, self.mul(r, self.splat(LN2_LO)));
+        let t2 = self.mul(t, t);
+        let t4 = self.mul(t2, t2);
+        let p = [
+            self.splat(EXP_P[0]),
+            self.splat(EXP_P[1]),
+            self.splat(EXP_P[2]),
+            self.splat(EXP_P[3]),
+            self.splat(EXP_P[4]),
+            self.splat(EXP_P[5]),
+        ];
+        let z = self.add(
+            self.mul(self.add(self.mul(p[3], t), p[2]), t2),
+            self.add(
+                self.mul(self.add(self.mul(p[5], t), p[4]), t4),
+                self.add(self.mul(p[1], t), p[0]),
+            ),
+        );
+        let z = self.add(self.mul(z, t2), t);
+        let z = self.add(z, self.splat(1.0));
+        let a = self.add(r, self.splat(127.0 + 8_388_608.0));
+        let shift = s.splat_u32s(23);
+        let pow2 =
+            two!(|i| s
+                .transmute_f32s_u32s(s.wrapping_dyn_shl_u32s(s.transmute_u32s_f32s(a[i]), shift)));
+        self.select(zero, self.splat(0.0), self.mul(z, pow2))
+    }
+
+    /// `limit` of a block of summed displacements `d` (`s = |d|`; a zero `d` unchanged): the
+    /// operations of [`HeightLimit::limit_lanes`].
+    #[inline(always)]
+    fn limit(self, h: &HeightLimit, d: Block<S>, s_ref: f32) -> Block<S> {
+        let len = self.sqrt(self.length_squared(d));
+        let zero = self.eq(len, self.splat(0.0));
+        let nothing = Block {
+            x: self.splat(0.0),
+            y: self.splat(0.0),
+            z: self.splat(0.0),
+        };
+        let limited = match *h {
+            HeightLimit::Above { theta } => {
+                let s_max = self.splat(theta * s_ref);
+                let over = self.gt(len, s_max);
+                self.select3(over, self.scale(d, self.div(s_max, len)), d)
+            }
+            HeightLimit::Below { theta } => {
+                let s_min = self.splat(theta * s_ref);
+                let under = self.le(len, s_min);
+                let k = self.div(self.sub(len, s_min), len);
+                self.select3(under, nothing, self.scale(d, k))
+            }
+            HeightLimit::Both { below, above } => {
+                let (lo, hi) = (self.splat(below * s_ref), self.splat(above * s_ref));
+                let under = self.le(len, lo);
+                // `Lane::min`: `a` where `b` is NaN or `a < b`, else `b`.
+                let (a, b) = (self.sub(len, lo), self.sub(hi, lo));
+                let keep_a = self.or(self.lt(a, b), self.not(self.eq(b, b)));
+                let k = self.div(self.select(keep_a, a, b), len);
+                self.select3(under, nothing, self.scale(d, k))
+            }
+        };
+        self.select3(zero, d, limited)
+    }
+
+    /// `P = V + limit(Σₖ dₖ(V))` for the block `v`: the operations of
+    /// [`FfsdTool::deform_lanes`] (`D` summed in point order from zero). Every point's
+    /// `α` is 2 or 1 (see [`supports`]).
+    #[inline(always)]
+    fn deform(self, tool: &FfsdTool, bind: &FfsdBind, v: Block<S>) -> Block<S> {
+        let mut acc = Block {
+            x: self.splat(0.0),
+            y: self.splat(0.0),
+            z: self.splat(0.0),
+        };
+        for p in &bind.points {
+            let d = Block {
+                x: self.sub(self.splat(p.centre.x), v.x),
+                y: self.sub(self.splat(p.centre.y), v.y),
+                z: self.sub(self.splat(p.centre.z), v.z),
+            };
+            let d2 = self.length_squared(d);
+            let pow = if p.half_alpha == 1.0 {
+                d2
+            } else {
+                self.sqrt(d2)
+            };
+            let e = self.mul(
+                self.sub(pow, self.splat(p.anchor_pow)),
+                self.splat(p.inv_two_eps2),
+            );
+            let w = self.exp(self.neg(e));
+            let w = self.select(self.eq(w, w), w, self.splat(0.0));
+            let g = self.mul(self.splat(p.gamma), w);
+            acc = Block {
+                x: self.add(acc.x, self.mul(self.sub(v.x, self.splat(p.target.x)), g)),
+                y: self.add(acc.y, self.mul(self.sub(v.y, self.splat(p.target.y)), g)),
+                z: self.add(acc.z, self.mul(self.sub(v.z, self.splat(p.target.z)), g)),
+            };
+        }
+        let d = match &tool.height {
+            Some(h) => self.limit(h, acc, bind.s_ref),
+            None => acc,
+        };
+        Block {
+            x: self.add(v.x, d.x),
+            y: self.add(v.y, d.y),
+            z: self.add(v.z, d.z),
+        }
+    }
+}
+
+/// The most lanes of a block: two registers of AVX-512's 16 `f32`.
+const MAX_BLOCK: usize = 2 * LANES;
+
+/// [`Lane::exp`] on the lanes of `x`: the blocks outside `exp`'s common case (subnormal or
+/// infinite `2ʳ`, NaN), lane for lane the same function.
+#[inline(always)]
+fn exp_outside<S: Simd>(s: S, x: Two<S::f32s>) -> Two<S::f32s> {
+    let n = S::F32_LANES;
+    let mut lanes = [0.0_f32; MAX_BLOCK];
+    s.partial_store_f32s(&mut lanes[..n], x[0]);
+    s.partial_store_f32s(&mut lanes[n..2 * n], x[1]);
+    exp_lanes(&mut lanes);
+    [
+        s.partial_load_f32s(&lanes[..n]),
+        s.partial_load_f32s(&lanes[n..2 * n]),
+    ]
+}
+
+/// [`Lane::exp`] in place, a lane group at a time.
+#[inline(never)]
+fn exp_lanes(x: &mut [f32; MAX_BLOCK]) {
+    for part in x.as_chunks_mut::<LANES>().0 {
+        *part = Lane(*part).exp().0;
+    }
+}
+
+/// Whether this kernel evaluates `bind`: every point's `α` is 2 or 1, whose `|X − V|^α` is
+/// `d²` or `√d²` (another `α` takes `ln` and `exp` per lane: the lanes' kernel does those).
+pub(super) fn supports(bind: &FfsdBind) -> bool {
+    bind.points
+        .iter()
+        .all(|p| p.half_alpha == 1.0 || p.half_alpha == 0.5)
+}
+
+/// Two registers' worth of `f32` from `a` (whose length is their lanes), unaligned.
+#[inline(always)]
+fn load<S: Simd>(a: &[f32]) -> Two<S::f32s> {
+    let n = S::F32_LANES;
+    [
+        bytemuck::pod_read_unaligned(bytemuck::cast_slice(&a[..n])),
+        bytemuck::pod_read_unaligned(bytemuck::cast_slice(&a[n..2 * n])),
+    ]
+}
+
+/// Two registers into `a` (whose length is their lanes).
+#[inline(always)]
+fn store<S: Simd>(a: &mut [f32], v: Two<S::f32s>) {
+    let n = S::F32_LANES;
+    bytemuck::cast_slice_mut::<f32, u8>(&mut a[..n]).copy_from_slice(bytemuck::bytes_of(&v[0]));
+    bytemuck::cast_slice_mut::<f32, u8>(&mut a[n..2 * n])
+        .copy_from_slice(bytemuck::bytes_of(&v[1]));
+}
+
+/// Vertices gathered into coordinate arrays at once, before any is loaded into registers:
+/// a register loaded right after the scalar stores that wrote it waits for them (the
+/// store buffer cannot forward several stores to one load).
+const STAGE: usize = 256;
+
+/// Deforms the vertices `ids` of `positions` (or, with `ids` `None`, every position in
+/// order) into `out`: [`STAGE`] vertices gathered into coordinate arrays, then deformed a
+/// block of two registers at a time, then written out.
+#[inline(always)]
+pub(super) fn deform<S: Simd>(
+    simd: S,
+    tool: &FfsdTool,
+    bind: &FfsdBind,
+    positions: &[Vec3],
+    ids: Option<&[u32]>,
+    out: &mut [Vec3],
+) {
+    let ops = Ops(simd);
+    let n = 2 * S::F32_LANES;
+    debug_assert!(n <= MAX_BLOCK && STAGE.is_multiple_of(n));
+    let mut c = [[0.0_f32; STAGE]; 3];
+    let mut start = 0;
+    while start < out.len() {
+        let len = STAGE.min(out.len() - start);
+        // Lanes past the end repeat the last vertex (their results are dropped).
+        let padded = len.div_ceil(n) * n;
+        for l in 0..padded {
+            let k = start + l.min(len - 1);
+            let v = match ids {
+                Some(ids) => positions[ids[k] as usize],
+                None => positions[k],
+            };
+            (c[0][l], c[1][l], c[2][l]) = (v.x, v.y, v.z);
+        }
+        for b in (0..padded).step_by(n) {
+            let v = Block {
+                x: load::<S>(&c[0][b..b + n]),
+                y: load::<S>(&c[1][b..b + n]),
+                z: load::<S>(&c[2][b..b + n]),
+            };
+            let r = ops.deform(tool, bind, v);
+            store::<S>(&mut c[0][b..b + n], r.x);
+            store::<S>(&mut c[1][b..b + n], r.y);
+            store::<S>(&mut c[2][b..b + n], r.z);
+        }
+        for (l, o) in out[start..start + len].iter_mut().enumerate() {
+            *o = Vec3::new(c[0][l], c[1][l], c[2][l]);
+        }
+        start += len;
+    }
+}
+
+/// For each of `centres`, the vertex of `chunk` nearest to it and its squared distance
+/// `|V − X|²` (glam's `distance_squared` arithmetic: `(V − X)`, then `x² + y² + z²`), the
+/// first one on ties: blocks of two registers in order, and only where a lane beats the best
+/// so far, the block's lanes in order with the same strict test.
+#[inline(always)]
+pub(super) fn nearest<S: Simd>(
+    simd: S,
+    positions: &[Vec3],
+    chunk: &[u32],
+    centres: &[Vec3],
+) -> Vec<(u32, f32)> {
+    let ops = Ops(simd);
+    let n = 2 * S::F32_LANES;
+    debug_assert!(n <= MAX_BLOCK && STAGE.is_multiple_of(n));
+    let mut best = vec![(chunk[0], f32::INFINITY); centres.len()];
+    let mut c = [[0.0_f32; STAGE]; 3];
+    let mut d = [0.0_f32; MAX_BLOCK];
+    for part in chunk.chunks(STAGE) {
+        let len = part.len();
+        let padded = len.div_ceil(n) * n;
+        for l in 0..padded {
+            let v = positions[part[l.min(len - 1)] as usize];
+            (c[0][l], c[1][l], c[2][l]) = (v.x, v.y, v.z);
+        }
+        for b in (0..padded).step_by(n) {
+            let v = Block::<S> {
+                x: load::<S>(&c[0][b..b + n]),
+                y: load::<S>(&c[1][b..b + n]),
+                z: load::<S>(&c[2][b..b + n]),
+            };
+            let lanes = n.min(len - b);
+            for (best, x) in best.iter_mut().zip(centres) {
+                let dist = ops.length_squared(Block {
+                    x: ops.sub(v.x, ops.splat(x.x)),
+                    y: ops.sub(v.y, ops.splat(x.y)),
+                    z: ops.sub(v.z, ops.splat(x.z)),
+                });
+                let below = ops.lt(dist, ops.splat(best.1));
+                let none = simd.and_m32s(simd.not_m32s(below[0]), simd.not_m32s(below[1]));
+                if simd.first_true_m32s(simd.not_m32s(none)) == S::F32_LANES {
+                    continue;
+                }
+                store::<S>(&mut d[..n], dist);
+                for (l, &dl) in d[..lanes].iter().enumerate() {
+                    if dl < best.1 {
+                        *best = (part[b + l], dl);
+                    }
+                }
+            }
+        }
+    }
+    best
+}
