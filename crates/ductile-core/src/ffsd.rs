@@ -28,9 +28,10 @@
 //! is fused, so every register width gives the same bits. Every scalar value this module
 //! computes (`S_ref`, [`HeightLimit::limit`], the anchors' `|X − V_min|^α`) goes through the
 //! same lane arithmetic, so a vertex gets the same bits whichever vertices share its lanes.
-//! Tools whose every `α` is 2 or 1 (no `ln`: the identikit's macros) and the search for
-//! `V_min` run the same operations in `simd`'s explicit register code instead, which the
-//! compiler cannot rearrange lane by lane; the bits are the lanes' (tested).
+//! Where the CPU has AVX2, tools whose every `α` is 2 or 1 (no `ln`: the identikit's
+//! macros) and the search for `V_min` run the same operations in `simd`'s explicit register
+//! code instead, which the compiler cannot rearrange lane by lane; the bits are the lanes'
+//! (tested).
 
 use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Serialize};
@@ -511,7 +512,9 @@ impl pulp::WithSimd for Deform<'_> {
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, s: S) {
         let (tool, bind, positions) = (self.tool, self.bind, self.positions);
-        if simd::supports(bind) {
+        // With one lane per register (`pulp`'s scalar code), the lanes below vectorise
+        // better (SSE2, four to a register).
+        if S::F32_LANES > 1 && simd::supports(bind) {
             let ids = match self.vertices {
                 Vertices::Active(active) => Some(active),
                 Vertices::All => None,
@@ -575,7 +578,28 @@ impl pulp::WithSimd for Nearest<'_> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, s: S) -> Self::Output {
-        simd::nearest(s, self.positions, self.chunk, self.centres)
+        if S::F32_LANES > 1 {
+            return simd::nearest(s, self.positions, self.chunk, self.centres);
+        }
+        // One lane per register (`pulp`'s scalar code): the lanes vectorise better (SSE2).
+        // The distances `|V − X|²` of a lane group, and only when one beats the best so
+        // far, the group's lanes in order with the same strict test.
+        let centres: Vec<Lanes3> = self.centres.iter().map(|&x| Lanes3::splat(x)).collect();
+        let mut best = vec![(self.chunk[0], f32::INFINITY); centres.len()];
+        for group in self.chunk.chunks(LANES) {
+            let v = Lanes3::gather(self.positions, group);
+            for (b, c) in best.iter_mut().zip(&centres) {
+                let d = v.sub(*c).length_squared();
+                if d.simd_lt(Lane::splat(b.1)).any() {
+                    for (&i, &d) in group.iter().zip(d.as_array()) {
+                        if d < b.1 {
+                            *b = (i, d);
+                        }
+                    }
+                }
+            }
+        }
+        best
     }
 }
 
@@ -924,10 +948,12 @@ mod tests {
     }
 
     /// The register kernel (`α` of 2 or 1) gives every vertex the bits of the sixteen-float
-    /// lanes' `deform_lanes`, dispatched (AVX2 here) and in scalar code, for every height
-    /// limit: on 701 vertices (several stages, a partial block) spread so that `exp` meets
-    /// its common case, its underflow to 0 and the subnormal band between, which the
-    /// register kernel hands to the lanes' `exp`.
+    /// lanes' `deform_lanes`, dispatched (AVX2 here) and at one lane per register, for every
+    /// height limit: on 623 active vertices of 701 (several stages, a partial block) spread
+    /// so that `exp` meets its common case, its underflow to 0 and the subnormal band
+    /// between, which the register kernel hands to the lanes' `exp`; and for a point so weak
+    /// that its displacements are non-zero but their squared length underflows to 0 (the
+    /// height limit then keeps them unchanged).
     #[test]
     fn the_register_kernel_gives_the_lanes_bits() {
         let positions: Vec<Vec3> = (0..701)
@@ -953,6 +979,7 @@ mod tests {
             }),
         ];
         let mut bands = [false; 3];
+        let mut tiny_seen = false;
         for alpha in [2.0, 1.0] {
             let mut a = ControlPoint::basic(Vec3::new(0.5, 1.2, 0.3), 0.4, alpha, 0.15);
             a.mode = PointMode::Virtual;
@@ -961,8 +988,12 @@ mod tests {
             c.mode = PointMode::Directional {
                 reference: Vec3::new(1.4, 1.1, 0.8),
             };
-            for height in heights {
-                let mut tool = FfsdTool::new(vec![a, b, c]);
+            let weak = ControlPoint::basic(Vec3::new(1.0, 1.0, 1.0), 1e-24, alpha, 0.5);
+            for (points, height) in heights
+                .iter()
+                .flat_map(|&h| [(vec![a, b, c], h), (vec![weak], h)])
+            {
+                let mut tool = FfsdTool::new(points);
                 tool.height = height;
                 let bind = bound(&tool, &positions, &active);
                 assert!(simd::supports(&bind));
@@ -981,16 +1012,18 @@ mod tests {
                 let mut dispatched = vec![Vec3::ZERO; active.len()];
                 tool.deform(&bind, &positions, &active, &mut dispatched);
                 let mut scalar = vec![Vec3::ZERO; active.len()];
-                pulp::WithSimd::with_simd(
-                    Deform {
-                        tool: &tool,
-                        bind: &bind,
-                        positions: &positions,
-                        vertices: Vertices::Active(&active),
-                        out: &mut scalar,
-                    },
+                simd::deform(
                     pulp::Scalar::new(),
+                    &tool,
+                    &bind,
+                    &positions,
+                    Some(&active),
+                    &mut scalar,
                 );
+                tiny_seen |= lanes.iter().zip(&active).any(|(o, &i)| {
+                    let d = *o - positions[i as usize];
+                    d != Vec3::ZERO && d.length_squared() == 0.0
+                });
                 assert_eq!(differ(&dispatched, &lanes), None, "α {alpha}, {height:?}");
                 assert_eq!(differ(&scalar, &lanes), None, "α {alpha}, {height:?}");
                 let gathered: Vec<Vec3> = active.iter().map(|&i| positions[i as usize]).collect();
@@ -1000,6 +1033,7 @@ mod tests {
             }
         }
         assert_eq!(bands, [true; 3], "exp's three cases met");
+        assert!(tiny_seen, "a displacement whose squared length underflows");
     }
 
     #[test]
@@ -1038,13 +1072,15 @@ mod tests {
 
     /// The nearest active vertex of each centre is the first of the least
     /// `distance_squared`, as a plain loop finds it, on lists of every length around the
-    /// register blocks and stages (vertices repeated, so that ties occur).
+    /// register blocks and stages, dispatched and at one lane per register (both the
+    /// register code and the lanes that run there); every vertex appears four times, so
+    /// that the ties are exact.
     #[test]
     fn closest_is_the_first_nearest_of_a_plain_loop() {
         let positions: Vec<Vec3> = (0..600)
             .map(|i| {
                 let t = (i % 150) as f32 * 0.05;
-                Vec3::new(t.cos(), t.sin(), (i / 150) as f32 * 0.01)
+                Vec3::new(t.cos(), t.sin(), 0.0)
             })
             .collect();
         let xs = [
@@ -1069,6 +1105,16 @@ mod tests {
                 })
                 .collect();
             assert_eq!(closest(&positions, &active, &xs), plain, "{len} vertices");
+            let first = |b: Vec<(u32, f32)>| b.into_iter().map(|b| b.0).collect::<Vec<_>>();
+            let nearest = Nearest {
+                positions: &positions,
+                chunk: &active,
+                centres: &xs,
+            };
+            let lanes = pulp::WithSimd::with_simd(nearest, pulp::Scalar::new());
+            assert_eq!(first(lanes), plain, "{len} vertices, lanes");
+            let one = simd::nearest(pulp::Scalar::new(), &positions, &active, &xs);
+            assert_eq!(first(one), plain, "{len} vertices, one lane per register");
         }
     }
 

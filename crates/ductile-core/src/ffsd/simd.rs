@@ -1,8 +1,10 @@
 //! The FFSD deformation `P = V + limit(Σₖ dₖ(V))` and the search for each point's nearest
 //! vertex `V_min`, on blocks of vertices, two SIMD registers per value, in [`pulp`]'s
-//! explicit vector operations (16 vertices where the CPU has AVX2, 8 with SSE, 2 in scalar
-//! code). Two independent registers per step keep the long chain of `exp` from stalling the
-//! core on each operation's latency.
+//! explicit vector operations: 16 vertices where the CPU has AVX2. Two independent registers
+//! per step keep the long chain of `exp` from stalling the core on each operation's latency.
+//! Without AVX2, `pulp` dispatches to scalar code (one lane per register), and the callers
+//! run the lanes' kernels there instead, which the compiler vectorises for SSE2; the generic
+//! code here still runs at that width in the tests.
 //!
 //! The same kernels on [`crate::lane`]'s sixteen-float lanes (plain loops the compiler
 //! vectorises) came out of the compiler partly lane by lane: it vectorised the three
@@ -328,17 +330,17 @@ fn exp_outside<S: Simd>(s: S, x: Two<S::f32s>) -> Two<S::f32s> {
     let mut lanes = [0.0_f32; MAX_BLOCK];
     s.partial_store_f32s(&mut lanes[..n], x[0]);
     s.partial_store_f32s(&mut lanes[n..2 * n], x[1]);
-    exp_lanes(&mut lanes);
+    exp_lanes(&mut lanes, (2 * n).div_ceil(LANES));
     [
         s.partial_load_f32s(&lanes[..n]),
         s.partial_load_f32s(&lanes[n..2 * n]),
     ]
 }
 
-/// [`Lane::exp`] in place, a lane group at a time.
+/// [`Lane::exp`] in place on the first `groups` lane groups of `x`.
 #[inline(never)]
-fn exp_lanes(x: &mut [f32; MAX_BLOCK]) {
-    for part in x.as_chunks_mut::<LANES>().0 {
+fn exp_lanes(x: &mut [f32; MAX_BLOCK], groups: usize) {
+    for part in x.as_chunks_mut::<LANES>().0.iter_mut().take(groups) {
         *part = Lane(*part).exp().0;
     }
 }
