@@ -11,8 +11,9 @@
 //!   with its own cell.
 //!
 //! The register width is chosen when the program runs ([`pulp`]'s dispatch): 8 lanes with
-//! fused multiply–add where the CPU has AVX2 and FMA, 4 lanes (SSE) or scalar code elsewhere,
-//! so one binary runs everywhere and uses what it finds.
+//! fused multiply–add where the CPU has AVX2 and FMA, one lane of scalar code elsewhere
+//! (`pulp` 0.22 has no SSE level on x86), so one binary runs everywhere and uses what it
+//! finds.
 //!
 //! Each lane's arithmetic depends only on its own point (and, for B-splines, its own cell):
 //! no lane reads another, so a point gets the same bits whatever block it is in, and
