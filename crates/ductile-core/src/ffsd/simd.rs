@@ -49,6 +49,20 @@ macro_rules! two {
     };
 }
 
+/// Methods of [`Ops`] that apply one `pulp` operation to each register of their operands
+/// (`name(operands) -> result = pulp_operation`).
+macro_rules! pairwise {
+    ($($(#[$doc:meta])* $name:ident($($arg:ident: $ty:ident),*) -> $out:ident = $op:ident;)*) => {
+        $(
+            $(#[$doc])*
+            #[inline(always)]
+            fn $name(self, $($arg: Two<S::$ty>),*) -> Two<S::$out> {
+                two!(|i| self.0.$op($($arg[i]),*))
+            }
+        )*
+    };
+}
+
 /// A block of vertices: their coordinates.
 #[derive(Clone, Copy)]
 struct Block<S: Simd> {
@@ -68,29 +82,22 @@ impl<S: Simd> Ops<S> {
         [r, r]
     }
 
-    #[inline(always)]
-    fn add(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::f32s> {
-        two!(|i| self.0.add_f32s(a[i], b[i]))
-    }
-
-    #[inline(always)]
-    fn sub(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::f32s> {
-        two!(|i| self.0.sub_f32s(a[i], b[i]))
-    }
-
-    #[inline(always)]
-    fn mul(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::f32s> {
-        two!(|i| self.0.mul_f32s(a[i], b[i]))
-    }
-
-    #[inline(always)]
-    fn div(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::f32s> {
-        two!(|i| self.0.div_f32s(a[i], b[i]))
-    }
-
-    #[inline(always)]
-    fn sqrt(self, a: Two<S::f32s>) -> Two<S::f32s> {
-        two!(|i| self.0.sqrt_f32s(a[i]))
+    pairwise! {
+        add(a: f32s, b: f32s) -> f32s = add_f32s;
+        sub(a: f32s, b: f32s) -> f32s = sub_f32s;
+        mul(a: f32s, b: f32s) -> f32s = mul_f32s;
+        div(a: f32s, b: f32s) -> f32s = div_f32s;
+        sqrt(a: f32s) -> f32s = sqrt_f32s;
+        lt(a: f32s, b: f32s) -> m32s = less_than_f32s;
+        le(a: f32s, b: f32s) -> m32s = less_than_or_equal_f32s;
+        ge(a: f32s, b: f32s) -> m32s = greater_than_or_equal_f32s;
+        gt(a: f32s, b: f32s) -> m32s = greater_than_f32s;
+        eq(a: f32s, b: f32s) -> m32s = equal_f32s;
+        and(a: m32s, b: m32s) -> m32s = and_m32s;
+        or(a: m32s, b: m32s) -> m32s = or_m32s;
+        not(a: m32s) -> m32s = not_m32s;
+        /// `a` where `m`, else `b`.
+        select(m: m32s, a: f32s, b: f32s) -> f32s = select_f32s;
     }
 
     /// `-a`: the sign bit flipped, as `f32`'s negation.
@@ -100,57 +107,45 @@ impl<S: Simd> Ops<S> {
         two!(|i| self.0.xor_f32s(a[i], sign))
     }
 
-    #[inline(always)]
-    fn lt(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::m32s> {
-        two!(|i| self.0.less_than_f32s(a[i], b[i]))
-    }
-
-    #[inline(always)]
-    fn le(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::m32s> {
-        two!(|i| self.0.less_than_or_equal_f32s(a[i], b[i]))
-    }
-
-    #[inline(always)]
-    fn ge(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::m32s> {
-        two!(|i| self.0.greater_than_or_equal_f32s(a[i], b[i]))
-    }
-
-    #[inline(always)]
-    fn gt(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::m32s> {
-        two!(|i| self.0.greater_than_f32s(a[i], b[i]))
-    }
-
-    #[inline(always)]
-    fn eq(self, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::m32s> {
-        two!(|i| self.0.equal_f32s(a[i], b[i]))
-    }
-
-    #[inline(always)]
-    fn and(self, a: Two<S::m32s>, b: Two<S::m32s>) -> Two<S::m32s> {
-        two!(|i| self.0.and_m32s(a[i], b[i]))
-    }
-
-    #[inline(always)]
-    fn or(self, a: Two<S::m32s>, b: Two<S::m32s>) -> Two<S::m32s> {
-        two!(|i| self.0.or_m32s(a[i], b[i]))
-    }
-
-    #[inline(always)]
-    fn not(self, a: Two<S::m32s>) -> Two<S::m32s> {
-        two!(|i| self.0.not_m32s(a[i]))
-    }
-
-    /// `a` where `m`, else `b`.
-    #[inline(always)]
-    fn select(self, m: Two<S::m32s>, a: Two<S::f32s>, b: Two<S::f32s>) -> Two<S::f32s> {
-        two!(|i| self.0.select_f32s(m[i], a[i], b[i]))
-    }
-
     /// Whether every lane of `m` is set.
     #[inline(always)]
     fn all(self, m: Two<S::m32s>) -> bool {
         let m = self.0.and_m32s(m[0], m[1]);
         self.0.first_true_m32s(self.0.not_m32s(m)) == S::F32_LANES
+    }
+
+    /// Whether any lane of `m` is set.
+    #[inline(always)]
+    fn any(self, m: Two<S::m32s>) -> bool {
+        self.0.first_true_m32s(self.0.or_m32s(m[0], m[1])) < S::F32_LANES
+    }
+
+    /// `v` in every lane.
+    #[inline(always)]
+    fn splat3(self, v: Vec3) -> Block<S> {
+        Block {
+            x: self.splat(v.x),
+            y: self.splat(v.y),
+            z: self.splat(v.z),
+        }
+    }
+
+    #[inline(always)]
+    fn add3(self, a: Block<S>, b: Block<S>) -> Block<S> {
+        Block {
+            x: self.add(a.x, b.x),
+            y: self.add(a.y, b.y),
+            z: self.add(a.z, b.z),
+        }
+    }
+
+    #[inline(always)]
+    fn sub3(self, a: Block<S>, b: Block<S>) -> Block<S> {
+        Block {
+            x: self.sub(a.x, b.x),
+            y: self.sub(a.y, b.y),
+            z: self.sub(a.z, b.z),
+        }
     }
 
     /// `x² + y² + z²`, summed in that order (as [`crate::lane::Lanes3::length_squared`]).
@@ -202,7 +197,7 @@ impl<S: Simd> Ops<S> {
         let normal = self.and(self.ge(x, self.splat(-87.0)), self.le(x, self.splat(87.0)));
         let zero = self.lt(x, self.splat(-103.63));
         if !self.all(self.or(normal, zero)) {
-            return exp_outside(s, x);
+            return exp_outside::<S>(x);
         }
         // `Lane::exp`'s common case: `r = round(x / ln 2)` in [−126, 126], so `2ʳ` is normal
         // (`wide`'s `vm_pow2n` without its subnormal branch).
@@ -242,11 +237,7 @@ impl<S: Simd> Ops<S> {
     fn limit(self, h: &HeightLimit, d: Block<S>, s_ref: f32) -> Block<S> {
         let len = self.sqrt(self.length_squared(d));
         let zero = self.eq(len, self.splat(0.0));
-        let nothing = Block {
-            x: self.splat(0.0),
-            y: self.splat(0.0),
-            z: self.splat(0.0),
-        };
+        let nothing = self.splat3(Vec3::ZERO);
         let limited = match *h {
             HeightLimit::Above { theta } => {
                 let s_max = self.splat(theta * s_ref);
@@ -277,18 +268,9 @@ impl<S: Simd> Ops<S> {
     /// `α` is 2 or 1 (see [`supports`]).
     #[inline(always)]
     fn deform(self, tool: &FfsdTool, bind: &FfsdBind, v: Block<S>) -> Block<S> {
-        let mut acc = Block {
-            x: self.splat(0.0),
-            y: self.splat(0.0),
-            z: self.splat(0.0),
-        };
+        let mut acc = self.splat3(Vec3::ZERO);
         for p in &bind.points {
-            let d = Block {
-                x: self.sub(self.splat(p.centre.x), v.x),
-                y: self.sub(self.splat(p.centre.y), v.y),
-                z: self.sub(self.splat(p.centre.z), v.z),
-            };
-            let d2 = self.length_squared(d);
+            let d2 = self.length_squared(self.sub3(self.splat3(p.centre), v));
             let pow = if p.half_alpha == 1.0 {
                 d2
             } else {
@@ -301,21 +283,14 @@ impl<S: Simd> Ops<S> {
             let w = self.exp(self.neg(e));
             let w = self.select(self.eq(w, w), w, self.splat(0.0));
             let g = self.mul(self.splat(p.gamma), w);
-            acc = Block {
-                x: self.add(acc.x, self.mul(self.sub(v.x, self.splat(p.target.x)), g)),
-                y: self.add(acc.y, self.mul(self.sub(v.y, self.splat(p.target.y)), g)),
-                z: self.add(acc.z, self.mul(self.sub(v.z, self.splat(p.target.z)), g)),
-            };
+            let push = self.scale(self.sub3(v, self.splat3(p.target)), g);
+            acc = self.add3(acc, push);
         }
         let d = match &tool.height {
             Some(h) => self.limit(h, acc, bind.s_ref),
             None => acc,
         };
-        Block {
-            x: self.add(v.x, d.x),
-            y: self.add(v.y, d.y),
-            z: self.add(v.z, d.z),
-        }
+        self.add3(v, d)
     }
 }
 
@@ -325,16 +300,12 @@ const MAX_BLOCK: usize = 2 * LANES;
 /// [`Lane::exp`] on the lanes of `x`: the blocks outside `exp`'s common case (subnormal or
 /// infinite `2ʳ`, NaN), lane for lane the same function.
 #[inline(always)]
-fn exp_outside<S: Simd>(s: S, x: Two<S::f32s>) -> Two<S::f32s> {
+fn exp_outside<S: Simd>(x: Two<S::f32s>) -> Two<S::f32s> {
     let n = S::F32_LANES;
     let mut lanes = [0.0_f32; MAX_BLOCK];
-    s.partial_store_f32s(&mut lanes[..n], x[0]);
-    s.partial_store_f32s(&mut lanes[n..2 * n], x[1]);
+    store::<S>(&mut lanes[..2 * n], x);
     exp_lanes(&mut lanes, (2 * n).div_ceil(LANES));
-    [
-        s.partial_load_f32s(&lanes[..n]),
-        s.partial_load_f32s(&lanes[n..2 * n]),
-    ]
+    load::<S>(&lanes[..2 * n])
 }
 
 /// [`Lane::exp`] in place on the first `groups` lane groups of `x`.
@@ -377,6 +348,35 @@ fn store<S: Simd>(a: &mut [f32], v: Two<S::f32s>) {
 /// store buffer cannot forward several stores to one load).
 const STAGE: usize = 256;
 
+/// A stage of vertices: their x, y and z coordinates.
+type Stage = [[f32; STAGE]; 3];
+
+/// Gathers `len` vertices into `c` (`positions[ids[k]]`, or `positions[k]` without `ids`),
+/// the last one repeated up to `padded` lanes (their results are dropped). The vertices
+/// stay where `c` is, to be loaded a block at a time after all of them are written.
+#[inline(always)]
+fn gather(c: &mut Stage, positions: &[Vec3], ids: Option<&[u32]>, len: usize, padded: usize) {
+    for l in 0..padded {
+        let k = l.min(len - 1);
+        let v = match ids {
+            Some(ids) => positions[ids[k] as usize],
+            None => positions[k],
+        };
+        (c[0][l], c[1][l], c[2][l]) = (v.x, v.y, v.z);
+    }
+}
+
+/// The block of the stage's lanes `b..b + n`.
+#[inline(always)]
+fn load_block<S: Simd>(c: &Stage, b: usize) -> Block<S> {
+    let n = 2 * S::F32_LANES;
+    Block {
+        x: load::<S>(&c[0][b..b + n]),
+        y: load::<S>(&c[1][b..b + n]),
+        z: load::<S>(&c[2][b..b + n]),
+    }
+}
+
 /// Deforms the vertices `ids` of `positions` (or, with `ids` `None`, every position in
 /// order) into `out`: [`STAGE`] vertices gathered into coordinate arrays, then deformed a
 /// block of two registers at a time, then written out.
@@ -392,35 +392,23 @@ pub(super) fn deform<S: Simd>(
     let ops = Ops(simd);
     let n = 2 * S::F32_LANES;
     debug_assert!(n <= MAX_BLOCK && STAGE.is_multiple_of(n));
-    let mut c = [[0.0_f32; STAGE]; 3];
-    let mut start = 0;
-    while start < out.len() {
-        let len = STAGE.min(out.len() - start);
-        // Lanes past the end repeat the last vertex (their results are dropped).
+    let mut c: Stage = [[0.0; STAGE]; 3];
+    for (start, out) in (0..).step_by(STAGE).zip(out.chunks_mut(STAGE)) {
+        let len = out.len();
         let padded = len.div_ceil(n) * n;
-        for l in 0..padded {
-            let k = start + l.min(len - 1);
-            let v = match ids {
-                Some(ids) => positions[ids[k] as usize],
-                None => positions[k],
-            };
-            (c[0][l], c[1][l], c[2][l]) = (v.x, v.y, v.z);
+        match ids {
+            Some(ids) => gather(&mut c, positions, Some(&ids[start..]), len, padded),
+            None => gather(&mut c, &positions[start..], None, len, padded),
         }
         for b in (0..padded).step_by(n) {
-            let v = Block {
-                x: load::<S>(&c[0][b..b + n]),
-                y: load::<S>(&c[1][b..b + n]),
-                z: load::<S>(&c[2][b..b + n]),
-            };
-            let r = ops.deform(tool, bind, v);
+            let r = ops.deform(tool, bind, load_block::<S>(&c, b));
             store::<S>(&mut c[0][b..b + n], r.x);
             store::<S>(&mut c[1][b..b + n], r.y);
             store::<S>(&mut c[2][b..b + n], r.z);
         }
-        for (l, o) in out[start..start + len].iter_mut().enumerate() {
+        for (l, o) in out.iter_mut().enumerate() {
             *o = Vec3::new(c[0][l], c[1][l], c[2][l]);
         }
-        start += len;
     }
 }
 
@@ -439,31 +427,18 @@ pub(super) fn nearest<S: Simd>(
     let n = 2 * S::F32_LANES;
     debug_assert!(n <= MAX_BLOCK && STAGE.is_multiple_of(n));
     let mut best = vec![(chunk[0], f32::INFINITY); centres.len()];
-    let mut c = [[0.0_f32; STAGE]; 3];
+    let mut c: Stage = [[0.0; STAGE]; 3];
     let mut d = [0.0_f32; MAX_BLOCK];
     for part in chunk.chunks(STAGE) {
         let len = part.len();
         let padded = len.div_ceil(n) * n;
-        for l in 0..padded {
-            let v = positions[part[l.min(len - 1)] as usize];
-            (c[0][l], c[1][l], c[2][l]) = (v.x, v.y, v.z);
-        }
+        gather(&mut c, positions, Some(part), len, padded);
         for b in (0..padded).step_by(n) {
-            let v = Block::<S> {
-                x: load::<S>(&c[0][b..b + n]),
-                y: load::<S>(&c[1][b..b + n]),
-                z: load::<S>(&c[2][b..b + n]),
-            };
+            let v = load_block::<S>(&c, b);
             let lanes = n.min(len - b);
-            for (best, x) in best.iter_mut().zip(centres) {
-                let dist = ops.length_squared(Block {
-                    x: ops.sub(v.x, ops.splat(x.x)),
-                    y: ops.sub(v.y, ops.splat(x.y)),
-                    z: ops.sub(v.z, ops.splat(x.z)),
-                });
-                let below = ops.lt(dist, ops.splat(best.1));
-                let none = simd.and_m32s(simd.not_m32s(below[0]), simd.not_m32s(below[1]));
-                if simd.first_true_m32s(simd.not_m32s(none)) == S::F32_LANES {
+            for (best, &x) in best.iter_mut().zip(centres) {
+                let dist = ops.length_squared(ops.sub3(v, ops.splat3(x)));
+                if !ops.any(ops.lt(dist, ops.splat(best.1))) {
                     continue;
                 }
                 store::<S>(&mut d[..n], dist);
