@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use ductile_cli::suite::{Fixtures, MIXED_NODE};
-use ductile_core::influence::Mask;
+use ductile_core::influence::{ChunkBounds, Mask};
 use ductile_core::stack::LayerBinding;
 
 fn main() -> anyhow::Result<()> {
@@ -28,16 +28,24 @@ fn main() -> anyhow::Result<()> {
         let mut positions = rest.welded_positions().to_vec();
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         let mut totals = [0.0; 3];
+        let mut bounds = ChunkBounds::new(&positions);
         println!(
             "{:<32} {:>8} {:>8} {:>8} {:>8}",
             "layer", "active", "mask ms", "bind ms", "deform ms"
         );
         for layer in &stack.layers {
             let t0 = Instant::now();
+            // As `Stack::evaluate_surface` weighs a volume over every vertex: over the
+            // boxes of the vertex chunks, those of the last layer's vertices refreshed.
             let mask = match &layer.influence {
+                Some(inf) if inf.area.is_none() && !inf.volumes.is_empty() => {
+                    bounds.refresh(&positions);
+                    inf.mask_bounded(&positions, &bounds)
+                }
                 Some(inf) => inf.mask(&positions),
                 None => Mask::all(positions.len()),
             };
+            bounds.mark(&mask.indices);
             let t1 = Instant::now();
             let active = mask.indices.len();
             let binding = LayerBinding::bind_masked(

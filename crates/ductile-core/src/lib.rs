@@ -28,6 +28,7 @@ pub mod normals;
 mod polyline_lanes;
 pub mod primitives;
 pub mod refinement;
+mod registers;
 pub mod sketch;
 pub mod spline;
 pub mod stack;

@@ -18,7 +18,7 @@ use rayon::prelude::*;
 
 use crate::chunks::{CHUNK, PARALLEL_THRESHOLD, Reuse, for_each_at, gather_at, scatter_at, zeroed};
 use crate::error::{CoreError, Result, check_finite};
-use crate::influence::{Influence, Mask};
+use crate::influence::{ChunkBounds, Influence, Mask};
 use crate::mesh::{Deformed, RestMesh, Topology};
 use crate::refinement::{EdgePoint, RefinedMesh, WholeDeform};
 use crate::tool::{BindInput, Tool, ToolBind};
@@ -413,9 +413,34 @@ impl Stack {
         self.validate()?;
         let mut positions = rest.welded_positions().to_vec();
         let mut refined: Option<RefinedMesh> = None;
+        // The boxes of the vertex chunks, for the masks of volumes over every vertex of a
+        // big mesh (built at the first such mask, then kept up to date).
+        let mut bounds: Option<ChunkBounds> = None;
         for layer in self.layers.iter().filter(|l| !l.is_inert()) {
             let topology = refined.as_ref().map_or(rest.topology(), |r| &r.topology);
-            let binding = LayerBinding::bind(layer, &positions, topology)?;
+            let mask = match &layer.influence {
+                Some(inf)
+                    if inf.area.is_none()
+                        && !inf.volumes.is_empty()
+                        && positions.len() >= PARALLEL_THRESHOLD =>
+                {
+                    let b = bounds.get_or_insert_with(|| ChunkBounds::new(&positions));
+                    b.refresh(&positions);
+                    inf.mask_bounded(&positions, b)
+                }
+                Some(inf) => inf.mask(&positions),
+                None => Mask::all(positions.len()),
+            };
+            let binding =
+                LayerBinding::bind_masked(&layer.tool, Arc::new(mask), &positions, topology)?;
+            if let Some(b) = &mut bounds {
+                // A whole-layer tool may move any vertex; a per-vertex one, its active ones.
+                if layer.tool.is_whole_layer() {
+                    b.mark_all();
+                } else {
+                    b.mark(&binding.mask.indices);
+                }
+            }
             if let Some(splits) = binding.apply_refining(layer, &mut positions)? {
                 let base = match refined.take() {
                     Some(r) => r,

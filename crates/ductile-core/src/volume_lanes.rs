@@ -9,7 +9,10 @@
 //! union as `f32::max` and `1 − g` when inverted — with exactly rounded operations and no
 //! fused multiply–add, so a vertex gets the bits of [`Influence::volume_weight`] whatever
 //! the register width (tests in `influence.rs`). A custom spline falloff has no lane form
-//! and stays on the scalar path.
+//! and stays on the scalar path. Where the CPU has AVX2, a fresh mask (nothing to reuse)
+//! runs the same operations in explicit registers instead (`volume_lanes/simd.rs`).
+
+mod simd;
 
 use glam::Vec3;
 
@@ -158,6 +161,16 @@ impl LaneInfluence {
         })
     }
 
+    /// The weight of every vertex of a region that no cull box reaches, by `reaches(lo, hi)`
+    /// (whether the region holds a point of the box `lo..=hi`): 0, or 1 when inverted;
+    /// `None` when some cull box may reach it.
+    pub(crate) fn culled(&self, reaches: impl Fn(Vec3, Vec3) -> bool) -> Option<f32> {
+        if self.volumes.iter().any(|v| reaches(v.lo, v.hi)) {
+            return None;
+        }
+        Some(if self.invert { 1.0 } else { 0.0 })
+    }
+
     /// `w(v)` in each lane: outside every cull box the weight is 0 (1 when inverted) from the
     /// box test alone, as the scalar path decides it; inside one, `g` (or `1 − g`).
     #[inline(always)]
@@ -302,7 +315,10 @@ impl pulp::WithSimd for Gather<'_> {
     type Output = Mask;
 
     #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _: S) -> Mask {
+    fn with_simd<S: pulp::Simd>(self, s: S) -> Mask {
+        if S::F32_LANES > 1 && self.reuse.is_none() {
+            return simd::mask(s, self.influence, self.ids, self.positions);
+        }
         let mut mask = Mask::default();
         let start = match self.ids {
             Ids::Range(start, _) => start,
