@@ -140,11 +140,14 @@ fn gather(table: &[Vec3], k: &[usize; LANES], same: bool, stride: usize, i: usiz
     if same {
         return Lanes3::splat(table[k[0] * stride + i]);
     }
-    let mut out = Lanes3::ZERO;
-    for (j, &k) in k.iter().enumerate() {
-        out.set(j, table[k * stride + i]);
+    // The coefficients side by side, then split as a load splits them (vector shuffles):
+    // written lane by lane into the coordinate arrays, each register loaded from them
+    // waited for its sixteen stores.
+    let mut points = [Vec3::ZERO; LANES];
+    for (p, &k) in points.iter_mut().zip(k) {
+        *p = table[k * stride + i];
     }
-    out
+    Lanes3::load(&points)
 }
 
 /// `a·b` in glam's order: `(ax bx + ay by) + az bz`.

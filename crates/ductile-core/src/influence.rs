@@ -463,7 +463,8 @@ impl ChunkBounds {
         }
     }
 
-    /// Flags the chunks of the vertices `changed` (ascending) as stale.
+    /// Flags the chunks of the vertices `changed` as stale (in any order; ascending, as a
+    /// mask's, flags each chunk once).
     pub fn mark(&mut self, changed: &[u32]) {
         let mut last = usize::MAX;
         for &i in changed {
@@ -473,11 +474,6 @@ impl ChunkBounds {
                 last = c;
             }
         }
-    }
-
-    /// Flags every chunk as stale.
-    pub fn mark_all(&mut self) {
-        self.stale.fill(true);
     }
 
     /// Computes the boxes of the stale chunks again from `positions`, or every box when
@@ -578,7 +574,10 @@ impl Influence {
 
     /// [`Influence::mask`], passing over the chunks of vertices whose box in `bounds` (of
     /// these `positions`, refreshed) no volume's cull box reaches: their weight is that of
-    /// no volume (0, or 1 when inverted) without a position read. The same mask.
+    /// no volume (0, or 1 when inverted) without a position read. The same mask. The boxes
+    /// serve the masks of volumes over every vertex of a mesh above the parallel threshold,
+    /// with a falloff that has a lane form; other masks, and boxes of another vertex count,
+    /// go as [`Influence::mask`] does.
     #[must_use]
     pub fn mask_bounded(&self, positions: &[Vec3], bounds: &ChunkBounds) -> Mask {
         self.mask_with(self.area.as_deref(), positions, None, Some(bounds))
@@ -616,6 +615,7 @@ impl Influence {
         bounds: Option<&ChunkBounds>,
     ) -> Mask {
         let n = positions.len();
+        let bounds = bounds.filter(|b| b.len == n);
         if self.volumes.is_empty() {
             // `g(v) = 1` everywhere: the mask is the area (or every vertex), weight 1.
             let indices: Vec<u32> = match area {

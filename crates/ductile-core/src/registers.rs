@@ -1,16 +1,14 @@
 //! Blocks of two SIMD registers in [`pulp`]'s explicit vector operations, for the kernels
-//! that [`crate::lane`]'s sixteen-float lanes compiled badly: 16 `f32` where the CPU has
-//! AVX2, one where `pulp` dispatches to scalar code (x86 without AVX2; the callers run the
-//! lanes' kernels there, which the compiler vectorises for SSE2).
+//! that [`crate::lane`]'s sixteen-float lanes compiled badly: 16 `f32` a block where the CPU
+//! has AVX2 (x86), 8 with NEON (aarch64), 2 where `pulp` dispatches to scalar code (x86
+//! without AVX2; the callers run the lanes' kernels there, which the compiler vectorises for
+//! SSE2).
 //!
 //! Two independent registers per value let the core overlap one register's chain of
-//! dependent operations with the other's. Vertices are staged: a stage of [`STAGE`]
-//! positions is copied into coordinate arrays before any register is loaded from them, since
-//! a register loaded right after the scalar stores that wrote it waits for them (the store
-//! buffer cannot forward several stores to one load). The operations here are exactly
-//! rounded and never fused, so a kernel that takes the lanes' operations in the lanes' order
-//! gets their bits. Users: `ffsd/simd.rs` (FFSD deformation and nearest vertices) and
-//! `volume_lanes.rs` (volume masks).
+//! dependent operations with the other's. The operations here are exactly rounded and never
+//! fused, so a kernel that takes the lanes' operations in the lanes' order gets their bits.
+//! Users: `ffsd/simd.rs` (FFSD deformation and nearest vertices) and `volume_lanes/simd.rs`
+//! (volume masks).
 
 use glam::Vec3;
 use pulp::Simd;
@@ -185,44 +183,4 @@ pub(crate) fn store<S: Simd>(a: &mut [f32], v: Two<S::f32s>) {
     bytemuck::cast_slice_mut::<f32, u8>(&mut a[..n]).copy_from_slice(bytemuck::bytes_of(&v[0]));
     bytemuck::cast_slice_mut::<f32, u8>(&mut a[n..2 * n])
         .copy_from_slice(bytemuck::bytes_of(&v[1]));
-}
-
-/// Vertices gathered into coordinate arrays at once, before any is loaded into registers:
-/// a register loaded right after the scalar stores that wrote it waits for them (the
-/// store buffer cannot forward several stores to one load).
-pub(crate) const STAGE: usize = 256;
-
-/// A stage of vertices: their x, y and z coordinates.
-pub(crate) type Stage = [[f32; STAGE]; 3];
-
-/// Gathers `len` vertices into `c` (`positions[ids[k]]`, or `positions[k]` without `ids`),
-/// the last one repeated up to `padded` lanes (their results are dropped). The vertices
-/// stay where `c` is, to be loaded a block at a time after all of them are written.
-#[inline(always)]
-pub(crate) fn gather(
-    c: &mut Stage,
-    positions: &[Vec3],
-    ids: Option<&[u32]>,
-    len: usize,
-    padded: usize,
-) {
-    for l in 0..padded {
-        let k = l.min(len - 1);
-        let v = match ids {
-            Some(ids) => positions[ids[k] as usize],
-            None => positions[k],
-        };
-        (c[0][l], c[1][l], c[2][l]) = (v.x, v.y, v.z);
-    }
-}
-
-/// The block of the stage's lanes `b..b + n`.
-#[inline(always)]
-pub(crate) fn load_block<S: Simd>(c: &Stage, b: usize) -> Block<S> {
-    let n = 2 * S::F32_LANES;
-    Block {
-        x: load::<S>(&c[0][b..b + n]),
-        y: load::<S>(&c[1][b..b + n]),
-        z: load::<S>(&c[2][b..b + n]),
-    }
 }

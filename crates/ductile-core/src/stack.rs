@@ -18,7 +18,7 @@ use rayon::prelude::*;
 
 use crate::chunks::{CHUNK, PARALLEL_THRESHOLD, Reuse, for_each_at, gather_at, scatter_at, zeroed};
 use crate::error::{CoreError, Result, check_finite};
-use crate::influence::{ChunkBounds, Influence, Mask};
+use crate::influence::{ChunkBounds, Falloff, Influence, Mask};
 use crate::mesh::{Deformed, RestMesh, Topology};
 use crate::refinement::{EdgePoint, RefinedMesh, WholeDeform};
 use crate::tool::{BindInput, Tool, ToolBind};
@@ -422,6 +422,7 @@ impl Stack {
                 Some(inf)
                     if inf.area.is_none()
                         && !inf.volumes.is_empty()
+                        && !matches!(inf.falloff, Falloff::Curve(_))
                         && positions.len() >= PARALLEL_THRESHOLD =>
                 {
                     let b = bounds.get_or_insert_with(|| ChunkBounds::new(&positions));
@@ -434,12 +435,9 @@ impl Stack {
             let binding =
                 LayerBinding::bind_masked(&layer.tool, Arc::new(mask), &positions, topology)?;
             if let Some(b) = &mut bounds {
-                // A whole-layer tool may move any vertex; a per-vertex one, its active ones.
-                if layer.tool.is_whole_layer() {
-                    b.mark_all();
-                } else {
-                    b.mark(&binding.mask.indices);
-                }
+                // A layer moves its active vertices only (a refinement appends vertices, and
+                // the boxes are built again for the new count).
+                b.mark(&binding.mask.indices);
             }
             if let Some(splits) = binding.apply_refining(layer, &mut positions)? {
                 let base = match refined.take() {

@@ -15,7 +15,7 @@
 //! multiply–add), so every vertex gets the bits of [`super::FfsdTool::deform_lanes`], which
 //! the tests check at the dispatched width and in scalar code.
 //!
-//! The blocks, their staging and the shared operations are [`crate::registers`]'.
+//! The blocks and the shared operations are [`crate::registers`]'.
 //!
 //! `exp` is the lanes' [`crate::lane::Lane::exp`] where every lane of the block is in
 //! `[−87, 87]` (its range reduction and polynomial, `2ʳ` built in the exponent bits) or below
@@ -27,9 +27,7 @@ use pulp::Simd;
 
 use super::{FfsdBind, FfsdTool, HeightLimit};
 use crate::lane::{LANES, Lane};
-use crate::registers::{
-    Block, MAX_BLOCK, Ops, STAGE, Stage, Two, gather, load, load_block, store, two,
-};
+use crate::registers::{Block, MAX_BLOCK, Ops, Two, load, store, two};
 
 /// `ln 2` in two parts and `exp`'s polynomial, as [`crate::lane`] takes them.
 use crate::lane::{EXP_P, LN2_HI, LN2_LO};
@@ -180,6 +178,40 @@ pub(super) fn supports(bind: &FfsdBind) -> bool {
     bind.points
         .iter()
         .all(|p| p.half_alpha == 1.0 || p.half_alpha == 0.5)
+}
+
+/// Vertices gathered into coordinate arrays at once, before any is loaded into registers:
+/// a register loaded right after the scalar stores that wrote it waits for them (the
+/// store buffer cannot forward several stores to one load).
+const STAGE: usize = 256;
+
+/// A stage of vertices: their x, y and z coordinates.
+type Stage = [[f32; STAGE]; 3];
+
+/// Gathers `len` vertices into `c` (`positions[ids[k]]`, or `positions[k]` without `ids`),
+/// the last one repeated up to `padded` lanes (their results are dropped). The vertices
+/// stay where `c` is, to be loaded a block at a time after all of them are written.
+#[inline(always)]
+fn gather(c: &mut Stage, positions: &[Vec3], ids: Option<&[u32]>, len: usize, padded: usize) {
+    for l in 0..padded {
+        let k = l.min(len - 1);
+        let v = match ids {
+            Some(ids) => positions[ids[k] as usize],
+            None => positions[k],
+        };
+        (c[0][l], c[1][l], c[2][l]) = (v.x, v.y, v.z);
+    }
+}
+
+/// The block of the stage's lanes `b..b + n`.
+#[inline(always)]
+fn load_block<S: Simd>(c: &Stage, b: usize) -> Block<S> {
+    let n = 2 * S::F32_LANES;
+    Block {
+        x: load::<S>(&c[0][b..b + n]),
+        y: load::<S>(&c[1][b..b + n]),
+        z: load::<S>(&c[2][b..b + n]),
+    }
 }
 
 /// Deforms the vertices `ids` of `positions` (or, with `ids` `None`, every position in

@@ -1,14 +1,16 @@
 //! Volume masks on blocks of two SIMD registers in [`pulp`]'s explicit vector operations
-//! ([`crate::registers`]): 16 vertices a block where the CPU has AVX2. A fresh mask (no
-//! earlier mask to reuse) of an influence whose falloff has a lane form runs here; the
-//! kernel on the lanes keeps the masks made from an earlier one, and CPUs without AVX2
-//! (where `pulp` dispatches to scalar code and the compiler vectorises the lanes for SSE2).
+//! ([`crate::registers`]): 16 vertices a block where the CPU has AVX2 (8 with NEON). A fresh
+//! mask (no earlier mask to reuse) of an influence whose falloff has a lane form runs here;
+//! the kernel on the lanes keeps the masks made from an earlier one, and the CPUs where
+//! `pulp` dispatches to scalar code (x86 without AVX2: the compiler vectorises the lanes for
+//! SSE2).
 //!
 //! The lanes' kernel came out of the compiler with its comparisons packed into bytes and
 //! unpacked again for every select, and a branch per lane to append the weights. Here the
-//! comparisons stay in registers, and only a block with a positive weight goes lane by lane. Each step is the lanes' operation in the lanes' order, exactly rounded and
-//! never fused, so every vertex gets the bits of [`crate::influence::Influence::volume_weight`]
-//! (tests here, at the dispatched width and in scalar code, and in `influence.rs`).
+//! comparisons stay in registers, and a block's positive lanes are packed without a branch.
+//! Each step is the lanes' operation in the lanes' order, exactly rounded and never fused,
+//! so every vertex gets the bits of [`crate::influence::Influence::volume_weight`] (tests
+//! here, at the dispatched width and in scalar code, and in `influence.rs`).
 
 use glam::Vec3;
 use pulp::Simd;
@@ -148,6 +150,7 @@ impl<S: Simd> Ops<S> {
     #[inline(always)]
     fn weights(self, influence: &LaneInfluence, v: Block<S>) -> Option<Two<S::f32s>> {
         let outside = self.splat(if influence.invert { 1.0 } else { 0.0 });
+        // No lane set (`0 < 0`), then the union of the volumes' boxes.
         let mut inside = self.lt(self.splat(0.0), self.splat(0.0));
         for vol in &influence.volumes {
             let (lo, hi) = (vol.lo, vol.hi);
@@ -266,10 +269,10 @@ mod tests {
 
     /// Every shape, placed and rotated, each falloff with and without an inner plateau,
     /// inverted or not, one volume or a union: the kernel at the dispatched width and in
-    /// scalar code gives the vertices of positive weight with the bits of the scalar path (`volume_weight` inside a
-    /// cull box), on points
-    /// around the volumes, on their axes and centres, and at NaN and the infinities, over
-    /// ranges and lists of every length around the block and stage sizes.
+    /// scalar code gives the vertices of positive weight with the bits of the scalar path
+    /// (`volume_weight` inside a cull box), on points around the volumes, on their axes and
+    /// centres, and at NaN and the infinities, over ranges and lists of every length around
+    /// the block size.
     #[test]
     fn the_register_kernel_gives_the_per_vertex_weights_bits() {
         let placement = Affine3A::from_scale_rotation_translation(
