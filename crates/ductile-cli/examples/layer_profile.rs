@@ -38,7 +38,7 @@ fn main() -> anyhow::Result<()> {
             // As `Stack::evaluate_surface` weighs a volume over every vertex: over the
             // boxes of the vertex chunks, those of the last layer's vertices refreshed.
             let mask = match &layer.influence {
-                Some(inf) if inf.area.is_none() && !inf.volumes.is_empty() => {
+                Some(inf) if inf.reads_chunk_bounds(positions.len()) => {
                     bounds.refresh(&positions);
                     inf.mask_bounded(&positions, &bounds)
                 }

@@ -583,6 +583,17 @@ impl Influence {
         self.mask_with(self.area.as_deref(), positions, None, Some(bounds))
     }
 
+    /// Whether [`Influence::mask_bounded`] reads the chunk boxes on `n` positions: volumes
+    /// over every vertex of a mesh above the parallel threshold, with a falloff that has a
+    /// lane form (a caller builds the boxes only for such masks).
+    #[must_use]
+    pub fn reads_chunk_bounds(&self, n: usize) -> bool {
+        self.area.is_none()
+            && !self.volumes.is_empty()
+            && !matches!(self.falloff, Falloff::Curve(_))
+            && n >= PARALLEL_THRESHOLD
+    }
+
     /// [`Influence::mask`] with `area` (sorted welded indices) in place of [`Influence::area`],
     /// for a caller that keeps the area's vertices elsewhere (shared between layers).
     #[must_use]
@@ -770,7 +781,7 @@ fn join(parts: &[Mask]) -> Mask {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     #[test]
@@ -1064,29 +1075,15 @@ mod tests {
             }
             v
         };
-        let placement = Affine3A::from_scale_rotation_translation(
-            Vec3::new(1.2, 0.7, 0.9),
-            glam::Quat::from_euler(glam::EulerRot::XYZ, 0.4, -0.7, 1.1),
-            Vec3::new(0.1, -0.2, 0.3),
+        let placement = placement();
+        let shapes = every_shape(
+            vec![
+                Vec3::new(-0.5, 0.0, 0.0),
+                Vec3::ZERO,
+                Vec3::new(0.4, 0.5, 0.1),
+            ],
+            vec![0.2, 0.4, 0.3],
         );
-        let shapes = [
-            Shape::Sphere { radius: 0.8 },
-            Shape::Box {
-                half_extents: Vec3::new(0.5, 0.3, 0.75),
-            },
-            Shape::Capsule {
-                radius: 0.3,
-                half_height: 0.5,
-            },
-            Shape::Tube {
-                points: vec![
-                    Vec3::new(-0.5, 0.0, 0.0),
-                    Vec3::ZERO,
-                    Vec3::new(0.4, 0.5, 0.1),
-                ],
-                radii: vec![0.2, 0.4, 0.3],
-            },
-        ];
         let falloffs = [
             Falloff::None,
             Falloff::Linear,
@@ -1133,20 +1130,10 @@ mod tests {
             .collect();
         positions[5] = Vec3::new(f32::NAN, 0.0, 0.0);
         positions[CHUNK + 7] = Vec3::splat(f32::NAN);
-        let shapes = [
-            Shape::Sphere { radius: 0.8 },
-            Shape::Box {
-                half_extents: Vec3::new(0.5, 0.3, 0.75),
-            },
-            Shape::Capsule {
-                radius: 0.3,
-                half_height: 0.5,
-            },
-            Shape::Tube {
-                points: vec![Vec3::new(-0.5, 0.0, 0.0), Vec3::new(0.4, 0.5, 0.1)],
-                radii: vec![0.2, 0.4],
-            },
-        ];
+        let shapes = every_shape(
+            vec![Vec3::new(-0.5, 0.0, 0.0), Vec3::new(0.4, 0.5, 0.1)],
+            vec![0.2, 0.4],
+        );
         let placement = Affine3A::from_rotation_translation(
             glam::Quat::from_rotation_z(0.4),
             Vec3::new(1.0, 0.0, 0.5),
@@ -1184,6 +1171,30 @@ mod tests {
                 assert_eq!(inf.mask_bounded(&positions, &bounds), inf.mask(&positions));
             }
         }
+    }
+
+    /// The placement the shape tests put their volumes at: scaled, rotated and moved.
+    pub(crate) fn placement() -> Affine3A {
+        Affine3A::from_scale_rotation_translation(
+            Vec3::new(1.2, 0.7, 0.9),
+            glam::Quat::from_euler(glam::EulerRot::XYZ, 0.4, -0.7, 1.1),
+            Vec3::new(0.1, -0.2, 0.3),
+        )
+    }
+
+    /// A sphere, a box, a capsule and a tube through `points` with `radii`.
+    pub(crate) fn every_shape(points: Vec<Vec3>, radii: Vec<f32>) -> [Shape; 4] {
+        [
+            Shape::Sphere { radius: 0.8 },
+            Shape::Box {
+                half_extents: Vec3::new(0.5, 0.3, 0.75),
+            },
+            Shape::Capsule {
+                radius: 0.3,
+                half_height: 0.5,
+            },
+            Shape::Tube { points, radii },
+        ]
     }
 
     /// A mask's vertices with the bits of their weights.

@@ -18,7 +18,7 @@ use rayon::prelude::*;
 
 use crate::chunks::{CHUNK, PARALLEL_THRESHOLD, Reuse, for_each_at, gather_at, scatter_at, zeroed};
 use crate::error::{CoreError, Result, check_finite};
-use crate::influence::{ChunkBounds, Falloff, Influence, Mask};
+use crate::influence::{ChunkBounds, Influence, Mask};
 use crate::mesh::{Deformed, RestMesh, Topology};
 use crate::refinement::{EdgePoint, RefinedMesh, WholeDeform};
 use crate::tool::{BindInput, Tool, ToolBind};
@@ -419,12 +419,7 @@ impl Stack {
         for layer in self.layers.iter().filter(|l| !l.is_inert()) {
             let topology = refined.as_ref().map_or(rest.topology(), |r| &r.topology);
             let mask = match &layer.influence {
-                Some(inf)
-                    if inf.area.is_none()
-                        && !inf.volumes.is_empty()
-                        && !matches!(inf.falloff, Falloff::Curve(_))
-                        && positions.len() >= PARALLEL_THRESHOLD =>
-                {
+                Some(inf) if inf.reads_chunk_bounds(positions.len()) => {
                     let b = bounds.get_or_insert_with(|| ChunkBounds::new(&positions));
                     b.refresh(&positions);
                     inf.mask_bounded(&positions, b)

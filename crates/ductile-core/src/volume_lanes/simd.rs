@@ -264,8 +264,8 @@ pub(super) fn mask<S: Simd>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::influence::{Falloff, Influence, Shape, Volume};
-    use glam::Affine3A;
+    use crate::influence::tests::{every_shape, placement};
+    use crate::influence::{Falloff, Influence, Volume};
 
     /// Every shape, placed and rotated, each falloff with and without an inner plateau,
     /// inverted or not, one volume or a union: the kernel at the dispatched width and in
@@ -275,30 +275,17 @@ mod tests {
     /// the block size.
     #[test]
     fn the_register_kernel_gives_the_per_vertex_weights_bits() {
-        let placement = Affine3A::from_scale_rotation_translation(
-            Vec3::new(1.2, 0.7, 0.9),
-            glam::Quat::from_euler(glam::EulerRot::XYZ, 0.4, -0.7, 1.1),
-            Vec3::new(0.1, -0.2, 0.3),
+        let placement = placement();
+        // The tube has a segment of length 0.
+        let shapes = every_shape(
+            vec![
+                Vec3::new(-0.5, 0.0, 0.0),
+                Vec3::ZERO,
+                Vec3::ZERO,
+                Vec3::new(0.4, 0.5, 0.1),
+            ],
+            vec![0.2, 0.4, 0.4, 0.3],
         );
-        let shapes = [
-            Shape::Sphere { radius: 0.8 },
-            Shape::Box {
-                half_extents: Vec3::new(0.5, 0.3, 0.75),
-            },
-            Shape::Capsule {
-                radius: 0.3,
-                half_height: 0.5,
-            },
-            Shape::Tube {
-                points: vec![
-                    Vec3::new(-0.5, 0.0, 0.0),
-                    Vec3::ZERO,
-                    Vec3::ZERO,
-                    Vec3::new(0.4, 0.5, 0.1),
-                ],
-                radii: vec![0.2, 0.4, 0.4, 0.3],
-            },
-        ];
         let volumes: Vec<Volume> = shapes
             .iter()
             .map(|s| Volume::new(s.clone(), placement, "v").unwrap())
