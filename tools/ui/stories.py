@@ -82,6 +82,8 @@ IMPORT_PART_OK = (500, 538)
 # The offer to key an edit of animated fields (over the bottom of the view) and its Key
 # button when it names the bend's target.
 OFFER_BAR = (365, 670, 835, 705)
+# The hint over the top of the view while sketching.
+HINT_BOX = (365, 26, 835, 100)
 KEY_OFFER_BEND = (704, 689)
 # The timeline under the view: its first-frame button and the frame ruler (frames 0..48).
 TIMELINE_FIRST = (18, 727)
@@ -456,13 +458,9 @@ def story_sketch(studio):
     n = differing(start, cancelled)
     expect(n == 0, f"after Escape the view differs from before the sketch in {n} pixels")
     # The sketch again, without the cut.
-    add(studio, "Sketch bend", "3d")
-    time.sleep(1.0)
-    studio.drag(reference, steps=6)
-    time.sleep(3.0)
     # The target stroke: the same upper arm, the forearm turned up and out at the elbow.
     target = [(694, 240), (705, 258), (716, 276), (743, 272), (771, 268)]
-    studio.drag(target, steps=6)
+    sketch(studio, "Sketch bend", "3d", reference, target)
     bent = studio.shot("4-arm-bent", settle=4.0)
     moved = sum(1 for _, _, c in pixels(bent, (745, 245, 800, 275)) if is_mesh(c))
     expect(moved > 300, "the target stroke did not bend the forearm where it was drawn")
@@ -477,14 +475,30 @@ def rigid_pixels(shot):
 def bend_arm(studio):
     """Sketch mode on MakeHuman's right arm: the reference stroke down the arm, the target
     bent at the elbow (the strokes of the sketch story). Returns the shot after it."""
-    add(studio, "Sketch bend", "2")
-    time.sleep(1.0)
     reference = [(694, 240), (705, 258), (716, 276), (731, 300), (746, 323)]
-    studio.drag(reference, steps=6)
-    time.sleep(3.0)
     target = [(694, 240), (705, 258), (716, 276), (743, 272), (771, 268)]
-    studio.drag(target, steps=6)
+    sketch(studio, "Sketch bend", "2", reference, target)
     return studio.shot("2-arm-bent", settle=4.0)
+
+
+def sketch(studio, entry, name, reference, second):
+    """Add > ENTRY, then the reference stroke and the second (target or twist) stroke, each
+    drawn once the Studio shows it is waiting for it: the hint over the view appears when
+    sketch mode begins and changes when the reference is taken. Under software Vulkan on two
+    cores a frame can take a second or more; a stroke drawn before the click that enters
+    sketch mode is handled is lost, and the next one is then taken as the reference."""
+    time.sleep(1.5)
+    before = studio.capture(name)
+    add(studio, entry, name)
+    ready = studio.shot(f"{name}-sketch-mode", settle=0.5,
+                        until=lambda s: differing(before, s, HINT_BOX) > 500)
+    expect(differing(before, ready, HINT_BOX) > 500, f"{entry} showed no sketch hint")
+    studio.drag(reference, steps=6)
+    taken = studio.shot(f"{name}-reference-taken", settle=1.0,
+                        until=lambda s: differing(ready, s, HINT_BOX) > 500)
+    expect(differing(ready, taken, HINT_BOX) > 500,
+           f"{entry}: the reference stroke was not taken (the hint did not change)")
+    studio.drag(second, steps=6)
 
 
 def unkeyed(shot):
@@ -574,11 +588,9 @@ def story_animate(studio):
     expect(forearm_up(straight) < 100, "keying the straight target moved the arm")
     # The neck: a twist drawn at frame 24 (from the chest up, so the head turns), keyed.
     studio.click(*ruler(24))
-    add(studio, "Sketch twist", "5")
-    time.sleep(1.0)
-    studio.drag([(604, 188), (604, 173), (604, 158), (604, 143), (604, 128)], steps=6)
-    time.sleep(3.0)
-    studio.drag([(640, 160), (643, 160), (646, 160)], steps=4)
+    sketch(studio, "Sketch twist", "5",
+           [(604, 188), (604, 173), (604, 158), (604, 143), (604, 128)],
+           [(640, 160), (643, 160), (646, 160)])
     twisted = studio.shot("5-neck-twisted-at-24", settle=4.0)
     head = (560, 60, 660, 150)
     expect(differing(bent, twisted, head) > 300, "the twist stroke did not turn the head")
