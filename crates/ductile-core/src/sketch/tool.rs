@@ -733,12 +733,17 @@ mod tests {
     /// An open cylinder along +x from 0 to `LENGTH`, rings every `STEP`, with UVs and a
     /// UV seam (the first column of every ring is stored twice).
     fn cylinder() -> Mesh {
-        let rings = (LENGTH / STEP).round() as u32 + 1;
+        cylinder_every(STEP)
+    }
+
+    /// [`cylinder`] with rings every `step`.
+    fn cylinder_every(step: f32) -> Mesh {
+        let rings = (LENGTH / step).round() as u32 + 1;
         let cols = SEGMENTS + 1;
         let mut positions = Vec::new();
         let mut uvs = Vec::new();
         for r in 0..rings {
-            let x = r as f32 * STEP;
+            let x = r as f32 * step;
             for c in 0..cols {
                 let a = 2.0 * PI * (c % SEGMENTS) as f32 / SEGMENTS as f32;
                 positions.push(Vec3::new(x, RADIUS * a.cos(), RADIUS * a.sin()));
@@ -1187,6 +1192,91 @@ mod tests {
             }
         }
         assert!(out.normals.iter().all(|n| n.is_finite()));
+    }
+
+    /// On a mesh big enough for the stack's chunk boxes (24,592 welded vertices), a volume
+    /// layer after the bend weighs the vertices the bend moved into its sphere, where no
+    /// vertex lay at rest: the boxes of the chunks the bend moved are refreshed (or all built
+    /// again after a refining bend) before the mask reads them. The stack gives the bits of
+    /// the same layers bound one after the other with plain masks.
+    #[test]
+    fn a_volume_after_a_bend_weighs_the_vertices_moved_into_it_on_a_big_mesh() {
+        use crate::ffsd::{ControlPoint, FfsdTool};
+        use crate::influence::{Falloff, Influence, Shape, Volume};
+        use crate::refinement::RefinedMesh;
+        use crate::stack::LayerBinding;
+        let rest = RestMesh::new(cylinder_every(STEP / 16.0), "fine").unwrap();
+        assert!(rest.welded_positions().len() >= crate::chunks::PARALLEL_THRESHOLD);
+        let bump = |at: Vec3, radius: f32| {
+            let mut layer = Layer::new(
+                "bump",
+                Tool::Ffsd(FfsdTool::new(vec![ControlPoint::basic(
+                    at + Vec3::Z * 0.2,
+                    0.3,
+                    2.0,
+                    0.3,
+                )])),
+            );
+            let placement = glam::Affine3A::from_translation(at);
+            layer.influence = Some(Influence {
+                volumes: vec![Volume::new(Shape::Sphere { radius }, placement, "v").unwrap()],
+                falloff: Falloff::Smooth,
+                ..Influence::default()
+            });
+            layer
+        };
+        // The U's way back passes over x ∈ [2, 4] at y ≈ 2.55; the cylinder lies at y ≈ 0.
+        let over_the_way_back = Vec3::new(3.0, 8.0 / PI, 0.0);
+        let bits = |p: &[Vec3]| -> Vec<[u32; 3]> {
+            p.iter().map(|v| v.to_array().map(f32::to_bits)).collect()
+        };
+        // The U stretches its outside 1.2× and hardly bends an edge of this fine mesh: a
+        // refinement that splits every edge stretched by more than 1.1×.
+        let every_stretched = RefineOptions {
+            stretch: 1.1,
+            angle: 4.0,
+            max_levels: 1,
+        };
+        for refine in [None, Some(every_stretched)] {
+            let bend = SketchTool {
+                refine,
+                ..bend_tool(&rest, false)
+            };
+            let stack = Stack {
+                layers: vec![
+                    bump(Vec3::new(1.0, 0.0, 0.0), 0.6),
+                    Layer::new("bend", Tool::Sketch(Box::new(bend))),
+                    bump(over_the_way_back, 0.8),
+                ],
+            };
+            let out = stack.evaluate_surface(&rest).unwrap();
+            // The layers one after the other, each mask from every position.
+            let mut positions = rest.welded_positions().to_vec();
+            let mut refined: Option<RefinedMesh> = None;
+            let mut moved = 0;
+            for layer in &stack.layers {
+                let topology = refined.as_ref().map_or(rest.topology(), |r| &r.topology);
+                let binding = LayerBinding::bind(layer, &positions, topology).unwrap();
+                let before = positions.clone();
+                if let Some(splits) = binding.apply_refining(layer, &mut positions).unwrap() {
+                    let base = refined
+                        .take()
+                        .unwrap_or_else(|| RefinedMesh::unrefined(rest.mesh(), rest.topology()));
+                    refined = Some(base.split(&splits));
+                }
+                moved = before
+                    .iter()
+                    .zip(&positions)
+                    .filter(|(a, b)| a != b)
+                    .count();
+            }
+            assert!(moved > 50, "the last volume holds {moved} moved vertices");
+            let (a, b) = (bits(&out.positions), bits(&positions));
+            assert_eq!(a.len(), b.len(), "refine: {refine:?}");
+            let differ = a.iter().zip(&b).filter(|(a, b)| a != b).count();
+            assert_eq!(differ, 0, "positions differing, refine: {refine:?}");
+            assert_eq!(out.refined.is_some(), refine.is_some());
+        }
     }
 
     #[test]
