@@ -3,8 +3,11 @@
 //!
 //! The seed is the boundary polyline's closest point (`polyline_lanes.rs`); the Gauss–Newton
 //! steps `u ← u − (C − x)·C' / |C'|²` then run in every lane at once, each lane on its own
-//! piece: the piece's coefficients are gathered lane by lane and Horner's rule runs on the
-//! lanes. A lane stops where the scalar search stops (a zero or non-finite tangent, a NaN
+//! piece: the piece's coefficients are gathered (with AVX2, where the lanes' pieces lie
+//! within 16 of each other, a run of pieces is loaded by columns and each lane picks its own
+//! by a register permutation; else lane by lane) and Horner's rule runs on the lanes. The
+//! kind of gather is chosen once per evaluation: a join of lanes from two kinds is compiled
+//! lane by lane, with the vectors built again after it. A lane stops where the scalar search stops (a zero or non-finite tangent, a NaN
 //! step, a step that brings the point no closer) and keeps its answer while the others go
 //! on. The piece a step lands in is computed in `f32`, where piece indices are exact
 //! integers (fewer than `2²⁴` pieces), with the scalar code's `min`s and clamps. Every lane
@@ -13,7 +16,7 @@
 
 use glam::Vec3;
 
-use crate::curve_pieces::{Closest, CurvePieces, REFINE_STEPS};
+use crate::curve_pieces::{COLUMN_PAD, Closest, CurvePieces, REFINE_STEPS};
 use crate::frames::BOUND_BATCH;
 use crate::lane::{LANES, Lane, Lanes3, Mask, copy_prefix};
 
@@ -29,6 +32,7 @@ impl CurvePieces {
             pieces: self,
             xs,
             out,
+            permute: Permute::detect(),
         });
     }
 
@@ -50,20 +54,51 @@ impl CurvePieces {
         });
     }
 
-    /// `(C(u), dC/du)` in each lane, on each lane's piece `k[j]` (Horner's rule, as
+    /// `(C(u), dC/du)` in each lane, on each lane's piece `k` (Horner's rule, as
     /// [`CurvePieces::point_and_tangent`]).
     #[inline(always)]
-    fn point_and_tangent_lanes(&self, k: &[usize; LANES], u: Lane) -> (Lanes3, Lanes3) {
+    fn point_and_tangent_lanes(&self, k: Lane, u: Lane, permute: Permute) -> (Lanes3, Lanes3) {
         let p = self.degree;
         let q = p.max(1);
-        let same = k.iter().all(|&kj| kj == k[0]);
+        let pieces = Pieces::new(k, self.count, permute);
+        // The branch taken once for the whole evaluation: Horner's rule then runs on
+        // registers (a join of lanes from two kinds of gather is compiled lane by lane).
+        #[cfg(target_arch = "x86_64")]
+        if let Some((v3, rel, wide)) = pieces.window {
+            let height = self.count + COLUMN_PAD;
+            let mut c = Lanes3::ZERO;
+            for i in (0..=p).rev() {
+                c = c.scale(u).add(windowed(
+                    v3,
+                    &self.columns,
+                    height,
+                    i,
+                    pieces.first,
+                    rel,
+                    wide,
+                ));
+            }
+            let mut d = Lanes3::ZERO;
+            for i in (0..q).rev() {
+                d = d.scale(u).add(windowed(
+                    v3,
+                    &self.columns,
+                    height,
+                    p + 1 + i,
+                    pieces.first,
+                    rel,
+                    wide,
+                ));
+            }
+            return (c, d);
+        }
         let mut c = Lanes3::ZERO;
         for i in (0..=p).rev() {
-            c = c.scale(u).add(gather(&self.curve, k, same, p + 1, i));
+            c = c.scale(u).add(pieces.gather(&self.curve, p + 1, i));
         }
         let mut d = Lanes3::ZERO;
         for i in (0..q).rev() {
-            d = d.scale(u).add(gather(&self.tangent, k, same, q, i));
+            d = d.scale(u).add(pieces.gather(&self.tangent, q, i));
         }
         (c, d)
     }
@@ -81,11 +116,17 @@ impl CurvePieces {
     /// The closest points of a lane group whose seeds are finite (module documentation):
     /// each lane's piece, local parameter, point and squared distance.
     #[inline(always)]
-    fn closest_lanes(&self, x: &Lanes3, seg: Lane, frac: Lane) -> (Lane, Lane, Lanes3, Lane) {
+    fn closest_lanes(
+        &self,
+        x: &Lanes3,
+        seg: Lane,
+        frac: Lane,
+        permute: Permute,
+    ) -> (Lane, Lane, Lanes3, Lane) {
         let (zero, one) = (Lane::ZERO, Lane::splat(1.0));
         let last = Lane::splat((self.count - 1) as f32);
         let (mut k, mut u) = self.settled_lanes(seg, frac);
-        let (mut c, mut dc) = self.point_and_tangent_lanes(&indices(k, self.count), u);
+        let (mut c, mut dc) = self.point_and_tangent_lanes(k, u, permute);
         let mut best = c.sub(*x).length_squared();
         let mut going = !Mask::NONE;
         for _ in 0..REFINE_STEPS {
@@ -108,7 +149,7 @@ impl CurvePieces {
                 above.select((next - ahead).clamp01(), next),
             );
             let (kn, un) = self.settled_lanes(kn, un);
-            let (cn, dn) = self.point_and_tangent_lanes(&indices(kn, self.count), un);
+            let (cn, dn) = self.point_and_tangent_lanes(kn, un, permute);
             let d = cn.sub(*x).length_squared();
             going = going & d.simd_lt(best);
             best = going.select(d, best);
@@ -132,22 +173,135 @@ fn indices(k: Lane, count: usize) -> [usize; LANES] {
     out
 }
 
-/// Coefficient `i` of each lane's piece `k[j]` in a table of `stride` vectors per piece (one
-/// load when every lane is on the same piece, `same`, as the neighbouring vertices of a lane
-/// group often are).
+/// AVX2's register permutation, where the CPU has it (x86-64): the Gauss–Newton steps then
+/// take the coefficients of lanes whose pieces lie within 16 of each other from
+/// [`CurvePieces::columns`], loading the run of pieces and letting each lane pick its own
+/// (`vpermps`), in place of a load per lane and the shuffles that put the values in place.
+#[derive(Clone, Copy)]
+pub(crate) struct Permute {
+    #[cfg(target_arch = "x86_64")]
+    v3: Option<pulp::x86::V3>,
+}
+
+impl Permute {
+    /// The permutation where this CPU has it.
+    pub(crate) fn detect() -> Self {
+        Self {
+            #[cfg(target_arch = "x86_64")]
+            v3: pulp::x86::V3::try_new(),
+        }
+    }
+}
+
+/// The pieces of a lane group, for gathering their coefficients.
+struct Pieces {
+    /// Each lane's piece.
+    k: [usize; LANES],
+    /// The least of them.
+    first: usize,
+    /// Whether every lane is on piece `first`.
+    same: bool,
+    /// With AVX2, where the pieces lie within 16 of `first`: each lane's piece less `first`
+    /// (lanes 0–7, then 8–15), and whether some lie 8 or more past it.
+    #[cfg(target_arch = "x86_64")]
+    window: Option<(pulp::x86::V3, [core::arch::x86_64::__m256i; 2], bool)>,
+}
+
+impl Pieces {
+    #[inline(always)]
+    fn new(k: Lane, count: usize, permute: Permute) -> Self {
+        let k = indices(k, count);
+        let (mut first, mut last) = (k[0], k[0]);
+        for &kj in &k[1..] {
+            first = first.min(kj);
+            last = last.max(kj);
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = permute;
+        Self {
+            k,
+            first,
+            same: first == last,
+            #[cfg(target_arch = "x86_64")]
+            window: permute.v3.filter(|_| last - first < 16).map(|v3| {
+                let mut rel = [0_i32; LANES];
+                for (r, &kj) in rel.iter_mut().zip(&k) {
+                    *r = (kj - first) as i32;
+                }
+                (v3, bytemuck::cast(rel), last - first >= 8)
+            }),
+        }
+    }
+
+    /// Coefficient `i` of each lane's piece in `table` (`stride` vectors per piece): one
+    /// load when every lane is on the same piece (as the neighbouring vertices of a lane
+    /// group often are), else lane by lane.
+    #[inline(always)]
+    fn gather(&self, table: &[Vec3], stride: usize, i: usize) -> Lanes3 {
+        if self.same {
+            return Lanes3::splat(table[self.first * stride + i]);
+        }
+        // The coefficients side by side, then split as a load splits them (vector shuffles):
+        // written lane by lane into the coordinate arrays, each register loaded from them
+        // waited for its sixteen stores.
+        let mut points = [Vec3::ZERO; LANES];
+        for (p, &k) in points.iter_mut().zip(&self.k) {
+            *p = table[k * stride + i];
+        }
+        Lanes3::load(&points)
+    }
+}
+
+/// Coefficient `column` of each lane's piece `first + rel[j]` from the columns.
+#[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn gather(table: &[Vec3], k: &[usize; LANES], same: bool, stride: usize, i: usize) -> Lanes3 {
-    if same {
-        return Lanes3::splat(table[k[0] * stride + i]);
+fn windowed(
+    v3: pulp::x86::V3,
+    columns: &[f32],
+    height: usize,
+    column: usize,
+    first: usize,
+    rel: [core::arch::x86_64::__m256i; 2],
+    wide: bool,
+) -> Lanes3 {
+    let start = 3 * column * height + first;
+    let run = &columns[start..start + 2 * height + 16];
+    Lanes3 {
+        x: permuted(v3, &run[..16], rel, wide),
+        y: permuted(v3, &run[height..height + 16], rel, wide),
+        z: permuted(v3, &run[2 * height..2 * height + 16], rel, wide),
     }
-    // The coefficients side by side, then split as a load splits them (vector shuffles):
-    // written lane by lane into the coordinate arrays, each register loaded from them
-    // waited for its sixteen stores.
-    let mut points = [Vec3::ZERO; LANES];
-    for (p, &k) in points.iter_mut().zip(k) {
-        *p = table[k * stride + i];
+}
+
+/// Lane `j` of the result is `run[rel[j]]` (`rel[j] < 16`, below 8 unless `wide`): the run
+/// loaded in one or two registers, each lane's value picked by `vpermps` (which reads the
+/// low three bits of the index) and, where `wide`, the register chosen by `rel[j] ≥ 8`.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn permuted(
+    v3: pulp::x86::V3,
+    run: &[f32],
+    rel: [core::arch::x86_64::__m256i; 2],
+    wide: bool,
+) -> Lane {
+    use core::arch::x86_64::__m256;
+    let low: __m256 = bytemuck::pod_read_unaligned(bytemuck::cast_slice(&run[..8]));
+    let mut out = [
+        v3.avx2._mm256_permutevar8x32_ps(low, rel[0]),
+        v3.avx2._mm256_permutevar8x32_ps(low, rel[1]),
+    ];
+    if wide {
+        let high: __m256 = bytemuck::pod_read_unaligned(bytemuck::cast_slice(&run[8..16]));
+        let seven = v3.avx._mm256_set1_epi32(7);
+        for (o, r) in out.iter_mut().zip(rel) {
+            let upper = v3
+                .avx
+                ._mm256_castsi256_ps(v3.avx2._mm256_cmpgt_epi32(r, seven));
+            let picked = v3.avx2._mm256_permutevar8x32_ps(high, r);
+            *o = v3.avx._mm256_blendv_ps(*o, picked, upper);
+        }
     }
-    Lanes3::load(&points)
+    Lane(bytemuck::cast(out))
 }
 
 /// `a·b` in glam's order: `(ax bx + ay by) + az bz`.
@@ -161,6 +315,7 @@ struct ClosestEach<'a> {
     pieces: &'a CurvePieces,
     xs: &'a [Vec3],
     out: &'a mut [(Closest, f32)],
+    permute: Permute,
 }
 
 impl pulp::WithSimd for ClosestEach<'_> {
@@ -180,7 +335,8 @@ impl pulp::WithSimd for ClosestEach<'_> {
             let x = Lanes3::load(xs);
             let seeds = pieces.index.closest_lanes(&x, &mut bounds);
             let finite = seeds.d2.is_finite();
-            let (k, u, c, d2) = pieces.closest_lanes(&x, seeds.segment, seeds.fraction);
+            let (k, u, c, d2) =
+                pieces.closest_lanes(&x, seeds.segment, seeds.fraction, self.permute);
             for (j, o) in out.iter_mut().enumerate() {
                 if !finite.lane(j) {
                     *o = pieces.closest(xs[j]);

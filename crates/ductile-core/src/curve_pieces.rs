@@ -67,6 +67,10 @@ pub struct Closest {
     pub point: Vec3,
 }
 
+/// The zeros after each of [`CurvePieces::columns`]' columns: a load of 16 pieces' values
+/// from any piece stays in the column.
+pub(crate) const COLUMN_PAD: usize = 16;
+
 /// A curve in power-form pieces (module documentation).
 #[derive(Debug, Clone)]
 pub struct CurvePieces {
@@ -78,6 +82,11 @@ pub struct CurvePieces {
     pub(crate) curve: Vec<Vec3>,
     /// Per piece, `p` coefficients of `dC/du` (at least one, zero for a constant).
     pub(crate) tangent: Vec<Vec3>,
+    /// The coefficients of `curve`, then of `tangent`, by column: column `3i + c` holds
+    /// coordinate `c` of coefficient `i` of every piece (the tangent's coefficients numbered
+    /// after the curve's `p + 1`), then [`COLUMN_PAD`] zeros, so that the lanes can load the
+    /// coefficients of a run of consecutive pieces at once (`curve_lanes.rs`).
+    pub(crate) columns: Vec<f32>,
     /// Per piece, `p + 1` functions × `p + 1` coefficients of the point basis.
     point_basis: Vec<f32>,
     /// Per piece, `p` functions × `p` coefficients of the segment basis.
@@ -208,11 +217,22 @@ impl CurvePieces {
                 }
             }
         }
+        let q = p.max(1);
+        let mut columns = Vec::with_capacity(3 * (p + 1 + q) * (count + COLUMN_PAD));
+        for (table, per_piece) in [(&curve, p + 1), (&tangent, q)] {
+            for i in 0..per_piece {
+                for c in 0..3 {
+                    columns.extend((0..count).map(|k| table[k * per_piece + i][c]));
+                    columns.extend([0.0; COLUMN_PAD]);
+                }
+            }
+        }
         Self {
             degree: p,
             count,
             curve,
             tangent,
+            columns,
             point_basis,
             segment_basis,
             weight_rows,
