@@ -493,6 +493,11 @@ def sketch(studio, entry, name, reference, second):
     ready = studio.shot(f"{name}-sketch-mode", settle=0.5,
                         until=lambda s: differing(before, s, HINT_BOX) > 500)
     expect(differing(before, ready, HINT_BOX) > 500, f"{entry} showed no sketch hint")
+    # The pointer rests on the stroke's start for a few frames first: the Studio takes a
+    # press in the view where its last frame saw the pointer over the view, and a frame
+    # can take a second (CI on 2026-11-27: a press that came with the move was lost).
+    studio.xdo("mousemove", *reference[0])
+    time.sleep(2.0)
     studio.drag(reference, steps=6)
     taken = studio.shot(f"{name}-reference-taken", settle=1.0,
                         until=lambda s: differing(ready, s, HINT_BOX) > 500)
