@@ -7,8 +7,8 @@
 //! within 16 of each other, a run of pieces is loaded by columns and each lane picks its own
 //! by a register permutation; else lane by lane) and Horner's rule runs on the lanes. The
 //! kind of gather is chosen once per evaluation: a join of lanes from two kinds is compiled
-//! lane by lane, with the vectors built again after it. A lane stops where the scalar search stops (a zero or non-finite tangent, a NaN
-//! step, a step that brings the point no closer) and keeps its answer while the others go
+//! lane by lane, with the vectors built again after it. A lane stops where the scalar search
+//! stops (a zero or non-finite tangent, a NaN step, a step that brings the point no closer) and keeps its answer while the others go
 //! on. The piece a step lands in is computed in `f32`, where piece indices are exact
 //! integers (fewer than `2²⁴` pieces), with the scalar code's `min`s and clamps. Every lane
 //! does the scalar operations in their order, so each answer has the bits of
@@ -16,7 +16,7 @@
 
 use glam::Vec3;
 
-use crate::curve_pieces::{COLUMN_PAD, Closest, CurvePieces, REFINE_STEPS};
+use crate::curve_pieces::{Closest, CurvePieces, REFINE_STEPS};
 use crate::frames::BOUND_BATCH;
 use crate::lane::{LANES, Lane, Lanes3, Mask, copy_prefix};
 
@@ -65,30 +65,17 @@ impl CurvePieces {
         // registers (a join of lanes from two kinds of gather is compiled lane by lane).
         #[cfg(target_arch = "x86_64")]
         if let Some((v3, rel, wide)) = pieces.window {
-            let height = self.count + COLUMN_PAD;
             let mut c = Lanes3::ZERO;
             for i in (0..=p).rev() {
-                c = c.scale(u).add(windowed(
-                    v3,
-                    &self.columns,
-                    height,
-                    i,
-                    pieces.first,
-                    rel,
-                    wide,
-                ));
+                c = c
+                    .scale(u)
+                    .add(self.windowed(v3, i, pieces.first, rel, wide));
             }
             let mut d = Lanes3::ZERO;
             for i in (0..q).rev() {
-                d = d.scale(u).add(windowed(
-                    v3,
-                    &self.columns,
-                    height,
-                    p + 1 + i,
-                    pieces.first,
-                    rel,
-                    wide,
-                ));
+                d = d
+                    .scale(u)
+                    .add(self.windowed(v3, p + 1 + i, pieces.first, rel, wide));
             }
             return (c, d);
         }
@@ -101,6 +88,24 @@ impl CurvePieces {
             d = d.scale(u).add(pieces.gather(&self.tangent, q, i));
         }
         (c, d)
+    }
+
+    /// Coefficient `column` of each lane's piece `first + rel[j]`, from the columns.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn windowed(
+        &self,
+        v3: pulp::x86::V3,
+        column: usize,
+        first: usize,
+        rel: [core::arch::x86_64::__m256i; 2],
+        wide: bool,
+    ) -> Lanes3 {
+        Lanes3 {
+            x: permuted(v3, self.column_run(column, 0, first), rel, wide),
+            y: permuted(v3, self.column_run(column, 1, first), rel, wide),
+            z: permuted(v3, self.column_run(column, 2, first), rel, wide),
+        }
     }
 
     /// `(k, u)` with the end of an inner piece written as the start of the next one (the
@@ -223,13 +228,16 @@ impl Pieces {
             first,
             same: first == last,
             #[cfg(target_arch = "x86_64")]
-            window: permute.v3.filter(|_| last - first < 16).map(|v3| {
-                let mut rel = [0_i32; LANES];
-                for (r, &kj) in rel.iter_mut().zip(&k) {
-                    *r = (kj - first) as i32;
+            window: match permute.v3 {
+                Some(v3) if last - first < 16 => {
+                    let mut rel = [0_i32; LANES];
+                    for (r, &kj) in rel.iter_mut().zip(&k) {
+                        *r = (kj - first) as i32;
+                    }
+                    Some((v3, bytemuck::cast(rel), last - first >= 8))
                 }
-                (v3, bytemuck::cast(rel), last - first >= 8)
-            }),
+                _ => None,
+            },
         }
     }
 
@@ -249,27 +257,6 @@ impl Pieces {
             *p = table[k * stride + i];
         }
         Lanes3::load(&points)
-    }
-}
-
-/// Coefficient `column` of each lane's piece `first + rel[j]` from the columns.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn windowed(
-    v3: pulp::x86::V3,
-    columns: &[f32],
-    height: usize,
-    column: usize,
-    first: usize,
-    rel: [core::arch::x86_64::__m256i; 2],
-    wide: bool,
-) -> Lanes3 {
-    let start = 3 * column * height + first;
-    let run = &columns[start..start + 2 * height + 16];
-    Lanes3 {
-        x: permuted(v3, &run[..16], rel, wide),
-        y: permuted(v3, &run[height..height + 16], rel, wide),
-        z: permuted(v3, &run[2 * height..2 * height + 16], rel, wide),
     }
 }
 

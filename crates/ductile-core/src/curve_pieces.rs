@@ -69,7 +69,7 @@ pub struct Closest {
 
 /// The zeros after each of [`CurvePieces::columns`]' columns: a load of 16 pieces' values
 /// from any piece stays in the column.
-pub(crate) const COLUMN_PAD: usize = 16;
+const COLUMN_PAD: usize = 16;
 
 /// A curve in power-form pieces (module documentation).
 #[derive(Debug, Clone)]
@@ -241,6 +241,14 @@ impl CurvePieces {
             // At least two boundaries: the index always exists.
             index: PolylineIndex::new(boundaries).unwrap_or_else(|| unreachable!()),
         }
+    }
+
+    /// The 16 values of coordinate `c` of coefficient `column` ([`CurvePieces::columns`]) for
+    /// the pieces `first..first + 16` (zeros past the last piece).
+    #[inline(always)]
+    pub(crate) fn column_run(&self, column: usize, c: usize, first: usize) -> &[f32] {
+        let start = (3 * column + c) * (self.count + COLUMN_PAD) + first;
+        &self.columns[start..start + 16]
     }
 
     /// Number of pieces `m`.
