@@ -197,11 +197,16 @@ class Studio:
         self.xdo("key", keys)
         time.sleep(1.0)
 
-    def drag(self, points, steps=8, pause=0.15):
-        """Presses at the first point, moves through the others, releases at the last."""
-        self.xdo("mousemove", *points[0])
-        time.sleep(0.4)
-        self.xdo("mousedown", 1)
+    def drag(self, points, steps=8, pause=0.15, press_with_move=False):
+        """Presses at the first point, moves through the others, releases at the last. With
+        `press_with_move`, the move to the first point and the press go in one command (one
+        frame), without a pause between them."""
+        if press_with_move:
+            self.xdo("mousemove", *points[0], "mousedown", 1)
+        else:
+            self.xdo("mousemove", *points[0])
+            time.sleep(0.4)
+            self.xdo("mousedown", 1)
         time.sleep(0.4)
         for (x0, y0), (x1, y1) in zip(points, points[1:]):
             for k in range(1, steps + 1):
@@ -492,12 +497,11 @@ def sketch(studio, entry, name, reference, second):
     ready = studio.shot(f"{name}-sketch-mode", settle=0.5,
                         until=lambda s: differing(before, s, HINT_BOX) > 500)
     expect(differing(before, ready, HINT_BOX) > 500, f"{entry} showed no sketch hint")
-    # The pointer rests on the stroke's start for a few frames first: the Studio takes a
-    # press in the view where its last frame saw the pointer over the view, and a frame
-    # can take a second (CI on 2026-11-27: a press that came with the move was lost).
-    studio.xdo("mousemove", *reference[0])
-    time.sleep(2.0)
-    studio.drag(reference, steps=6)
+    # The pointer comes to the stroke's start and presses at once, as a quick hand does:
+    # under frames of a second the move and the press arrive in one frame, and the press
+    # must still belong to the view (CI on 2026-11-27 lost it, when the Studio judged a
+    # press by where its last frame had seen the pointer).
+    studio.drag(reference, steps=6, press_with_move=True)
     taken = studio.shot(f"{name}-reference-taken", settle=1.0,
                         until=lambda s: differing(ready, s, HINT_BOX) > 500)
     expect(differing(ready, taken, HINT_BOX) > 500,

@@ -79,8 +79,8 @@ impl OrbitCamera {
     }
 }
 
-/// Whether the pointer is over the 3-D viewport (not over a panel, menu or dialog); set by
-/// the UI each frame.
+/// Whether the pointer is over the 3-D viewport (not over a panel, menu or dialog); set at
+/// the start of each frame from that frame's pointer position ([`crate::pointer`]).
 #[derive(Resource, Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct PointerOverViewport(pub bool);
 

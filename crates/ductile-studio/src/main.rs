@@ -12,6 +12,7 @@ mod compare;
 mod ctrl_text;
 mod files;
 mod panels;
+mod pointer;
 mod screenshot;
 mod sketch;
 mod studio;

@@ -118,7 +118,10 @@ impl Plugin for StudioPlugin {
         .add_systems(Last, crate::autosave::autosave_at_exit)
         .add_systems(
             PreUpdate,
-            crate::ctrl_text::strip_ctrl_text
+            (
+                crate::ctrl_text::strip_ctrl_text,
+                crate::pointer::pointer_over_viewport,
+            )
                 .after(bevy_egui::EguiInputSet::WriteEguiEvents)
                 .before(bevy_egui::EguiPreUpdateSet::BeginPass),
         )

@@ -9,7 +9,7 @@ use ductile_bevy::prelude::*;
 use ductile_scene::document::NodeKind;
 
 use crate::authoring::AddNode;
-use crate::camera::{KeyboardToViewport, PointerOverViewport};
+use crate::camera::KeyboardToViewport;
 use crate::files::{FileDialogs, StudioAction};
 use crate::panels::add_menu::AddPopup;
 use crate::panels::history::HistoryPanel;
@@ -125,7 +125,6 @@ pub fn studio_ui(
     mut heat: ResMut<HeatMapSettings>,
     mut dialogs: ResMut<FileDialogs>,
     mut viewport: ResMut<ViewportRect>,
-    mut over: ResMut<PointerOverViewport>,
     mut keyboard: ResMut<KeyboardToViewport>,
     outputs: UiOutputs,
 ) -> Result {
@@ -404,16 +403,6 @@ pub fn studio_ui(
         if let Some(hint) = inputs.box_select.hint() {
             paint_hint(&painter, free, hint.to_owned());
         }
-    }
-    let pointer_in_free = ctx.pointer_latest_pos().is_some_and(|p| free.contains(p));
-    // Over the free rectangle and not over a window (dialog, menu) on top of it.
-    let over_viewport = pointer_in_free
-        && ctx.pointer_latest_pos().is_some_and(|p| {
-            ctx.layer_id_at(p)
-                .is_none_or(|l| l.order == egui::Order::Background)
-        });
-    if over.0 != over_viewport {
-        over.0 = over_viewport;
     }
     // Only a text field keeps the shortcuts from the viewport: a slider keeps the keyboard
     // focus after it is dragged, and Ctrl+Z must still undo that drag.
