@@ -24,6 +24,7 @@ use crate::curve::{CurveBasis, CurveEvaluator, validate_polygon};
 use crate::error::{CoreError, Result, check_finite};
 use crate::frames::{Frame, PolylineIndex, double_reflection, polyline_tangents};
 use crate::influence::Falloff;
+use crate::slerp::SlerpArc;
 use crate::tool::{BindInput, Deformer, uniform_scale};
 
 /// Samples per control point of a spline axis.
@@ -123,6 +124,8 @@ pub struct SampledAxis {
     pub twist: Vec<f32>,
     /// Scale `θ` at each sample.
     pub scale: Vec<f32>,
+    /// The slerp between the frames of each sample segment (one fewer than the samples).
+    arcs: Vec<SlerpArc>,
     /// The start of the frame propagation: first unit tangent and the normal given to
     /// [`double_reflection`].
     start: Frame,
@@ -202,9 +205,14 @@ impl SampledAxis {
         let frames = double_reflection(&points, &tangents, n0).ok_or_else(|| {
             degenerate("the axis has a cusp (zero tangent) where frames are undefined")
         })?;
+        let rotations: Vec<Quat> = frames.iter().map(Frame::rotation).collect();
         Ok(Self {
             points,
-            rotations: frames.iter().map(Frame::rotation).collect(),
+            arcs: rotations
+                .windows(2)
+                .map(|w| SlerpArc::new(w[0], w[1]))
+                .collect(),
+            rotations,
             twist,
             scale,
             start: Frame {
@@ -235,10 +243,9 @@ impl SampledAxis {
     /// `s` of `S = diag(1, s, s)`, so that `M⁻¹ = S⁻¹ (R W)ᵀ` needs no general inverse.
     fn at_with_parts(&self, j: usize, f: f32) -> (Vec3, Mat3, Mat3, f32) {
         let a = self.points[j].lerp(self.points[j + 1], f);
-        // Between equal frames (a straight stretch of axis) the frame itself, without the
-        // spherical interpolation's arc cosine and sines.
-        let (r0, r1) = (self.rotations[j], self.rotations[j + 1]);
-        let r = if r0 == r1 { r0 } else { r0.slerp(r1, f) };
+        // Between equal frames (a straight stretch of axis) the frame itself; otherwise the
+        // segment's slerp, whose arc cosine was taken once per segment.
+        let r = self.arcs[j].at(self.rotations[j], f);
         let q = self.twist[j] + (self.twist[j + 1] - self.twist[j]) * f;
         // As a weighted sum, not `θ_j + (θ_{j+1} − θ_j) f`: both terms are non-negative, so
         // between two valid (positive) scales the result is positive, where the difference

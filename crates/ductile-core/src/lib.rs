@@ -30,6 +30,7 @@ pub mod primitives;
 pub mod refinement;
 mod registers;
 pub mod sketch;
+pub mod slerp;
 pub mod spline;
 pub mod stack;
 pub mod surface;
