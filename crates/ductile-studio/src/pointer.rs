@@ -29,21 +29,14 @@ pub fn pointer_over_viewport(
     let Ok(ctx) = contexts.ctx_mut() else {
         return;
     };
-    let now = over_viewport(ctx, rect.0, cursor);
-    if over.0 != now {
-        over.0 = now;
-    }
+    over.set_if_neq(PointerOverViewport(over_viewport(ctx, rect.0, cursor)));
 }
 
 /// Whether `cursor` (logical pixels, which are egui points here) lies in the view's
 /// rectangle `rect` and no egui layer above the background (a window, menu or popup of the
 /// last pass) covers it.
 #[must_use]
-pub fn over_viewport(
-    ctx: &egui::Context,
-    rect: Option<(Vec2, Vec2)>,
-    cursor: Option<Vec2>,
-) -> bool {
+fn over_viewport(ctx: &egui::Context, rect: Option<(Vec2, Vec2)>, cursor: Option<Vec2>) -> bool {
     let (Some((min, max)), Some(c)) = (rect, cursor) else {
         return false;
     };
