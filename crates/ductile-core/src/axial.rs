@@ -19,6 +19,7 @@ use glam::{Affine3A, Mat3, Quat, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::axial_lanes::{AxisTable, BindArrays};
 use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots, zeroed};
 use crate::curve::{CurveBasis, CurveEvaluator, validate_polygon};
 use crate::error::{CoreError, Result, check_finite};
@@ -230,6 +231,17 @@ impl SampledAxis {
         self.start
     }
 
+    /// The segments as [`crate::axial_lanes`] reads them.
+    fn table(&self) -> AxisTable {
+        AxisTable::new(
+            &self.points,
+            &self.rotations,
+            &self.twist,
+            &self.scale,
+            &self.arcs,
+        )
+    }
+
     /// Axis point `A` and local-to-world map `M = R W S` at fraction `f` of sample segment
     /// `j`: position and twist/scale interpolated linearly, frame by spherical
     /// interpolation.
@@ -299,6 +311,18 @@ impl AxialBind {
     pub fn rest_axis(&self) -> &SampledAxis {
         &self.rest
     }
+
+    /// The per-vertex arrays, as the lanes read them.
+    fn arrays(&self) -> BindArrays<'_> {
+        BindArrays {
+            slot: &self.slot,
+            segment: &self.segment,
+            fraction: &self.fraction,
+            local: &self.local,
+            base: &self.base,
+            weight: &self.weight,
+        }
+    }
 }
 
 impl AxialTool {
@@ -328,6 +352,7 @@ impl AxialTool {
                 problem: "fewer than 2 samples".to_owned(),
             })?;
         let inv_r = 1.0 / self.radius;
+        let table = bind.rest.table();
         // Every vertex on its own, in parallel chunks (the same bits as one by one): the
         // closest axis points of a chunk's vertices that are not reused, a lane group at a
         // time.
@@ -348,26 +373,67 @@ impl AxialTool {
                         base[j] = old.base[s];
                         weight[j] = old.weight[s];
                     });
-                let mut found = vec![(0, 0.0, 0.0); xs.len()];
+                let n = xs.len();
+                let mut found = vec![(0, 0.0, 0.0); n];
                 index.closest_each(&xs, &mut found);
-                for ((&v, u), (j, f, d2)) in fresh.iter().zip(xs).zip(found) {
-                    let w = self.falloff.weight(d2.sqrt() * inv_r, self.inner);
+                let ws: Vec<f32> = found
+                    .iter()
+                    .map(|&(_, _, d2)| self.falloff.weight(d2.sqrt() * inv_r, self.inner))
+                    .collect();
+                // Lane groups on the lanes; the groups they leave, vertex by vertex.
+                let (mut ls, mut bs, mut done) =
+                    (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n], vec![false; n]);
+                table.bind_each(&found, &xs, &ws, &mut ls, &mut bs, &mut done);
+                for (k, ((&v, u), (j, f, _))) in fresh.iter().zip(xs).zip(found).enumerate() {
+                    let w = ws[k];
                     if w <= 0.0 {
                         continue;
                     }
-                    let (a, m, rw, s) = rest.at_with_parts(j, f);
-                    // M = R W S is a rotation times diag(1, s, s) with s > 0: M⁻¹ = S⁻¹ (R W)ᵀ.
-                    let l = rw.transpose() * (u - a);
-                    let l = Vec3::new(l.x, l.y / s, l.z / s);
+                    let (l, b) = if done[k] {
+                        (ls[k], bs[k])
+                    } else {
+                        bind_vertex(rest, u, j, f)
+                    };
                     segment[v] = j as u32;
                     fraction[v] = f;
                     local[v] = l;
-                    base[v] = a + m * l;
+                    base[v] = b;
                     weight[v] = w;
                 }
             });
         Ok(bind)
     }
+}
+
+/// The local coordinates `l = S⁻¹ (R W)ᵀ (U − A)` and the rest image `A + M l` of `u`, whose
+/// closest point on the rest axis is at fraction `f` of segment `j`: one vertex of
+/// [`AxialTool::bind_reusing`] (whose lane groups have these bits).
+fn bind_vertex(rest: &SampledAxis, u: Vec3, j: usize, f: f32) -> (Vec3, Vec3) {
+    let (a, m, rw, s) = rest.at_with_parts(j, f);
+    // M = R W S is a rotation times diag(1, s, s) with s > 0: M⁻¹ = S⁻¹ (R W)ᵀ.
+    let l = rw.transpose() * (u - a);
+    let l = Vec3::new(l.x, l.y / s, l.z / s);
+    (l, a + m * l)
+}
+
+/// The deformed position of welded vertex `i` at input position `u`: one vertex of
+/// [`Deformer::deform`] for [`AxialTool`] (whose lane groups have these bits).
+fn deform_vertex(deformed: &SampledAxis, bind: &AxialBind, u: Vec3, i: u32) -> Vec3 {
+    // A vertex that was not active when the layer bound stays.
+    let Some(&k) = bind.slot.get(i as usize).filter(|&&s| s != u32::MAX) else {
+        return u;
+    };
+    let k = k as usize;
+    let w = bind.weight[k];
+    if w <= 0.0 {
+        return u;
+    }
+    let (j, f, l) = (bind.segment[k] as usize, bind.fraction[k], bind.local[k]);
+    let (a2, m2) = deformed.at(j, f);
+    // D(U) − U = (A' + M₂ l) − (A + M₁ l): the second term was computed at bind time by the
+    // same operations, so the difference is exactly 0 for an unmoved axis.
+    let d = (a2 + m2 * l) - bind.base[k];
+    if w == 1.0 { u + d } else { u + d * w }
 }
 
 impl Deformer for AxialTool {
@@ -462,25 +528,15 @@ impl Deformer for AxialTool {
             }
             return;
         };
-        for (o, &i) in out.iter_mut().zip(active) {
-            let u = positions[i as usize];
-            // A vertex that was not active when the layer bound stays.
-            let Some(&k) = bind.slot.get(i as usize).filter(|&&s| s != u32::MAX) else {
-                *o = u;
-                continue;
-            };
-            let k = k as usize;
-            let w = bind.weight[k];
-            if w <= 0.0 {
-                *o = u;
-                continue;
+        // Lane groups on the lanes; the groups they leave, vertex by vertex.
+        let mut done = vec![false; active.len()];
+        deformed
+            .table()
+            .deform_each(bind.arrays(), positions, active, out, &mut done);
+        for ((o, &i), done) in out.iter_mut().zip(active).zip(done) {
+            if !done {
+                *o = deform_vertex(&deformed, bind, positions[i as usize], i);
             }
-            let (j, f, l) = (bind.segment[k] as usize, bind.fraction[k], bind.local[k]);
-            let (a2, m2) = deformed.at(j, f);
-            // D(U) − U = (A' + M₂ l) − (A + M₁ l): the second term was computed at bind time
-            // by the same operations, so the difference is exactly 0 for an unmoved axis.
-            let d = (a2 + m2 * l) - bind.base[k];
-            *o = if w == 1.0 { u + d } else { u + d * w };
         }
     }
 
@@ -822,6 +878,174 @@ mod tests {
         assert!(
             ron::from_str::<AxialTool>("(rest: [], deformed: [], radius: 1.0, bogus: 1)").is_err()
         );
+    }
+
+    /// A spread of points around `axis`'s bounds (a deterministic generator), with a few that
+    /// are not finite.
+    fn spread(count: usize, seed: u32) -> Vec<Vec3> {
+        let mut seed = seed.max(1);
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed as f32 / u32::MAX as f32
+        };
+        let mut pts: Vec<Vec3> = (0..count)
+            .map(|_| Vec3::new(2.4 * next() - 0.2, next() - 0.5, next() - 0.5))
+            .collect();
+        for (k, bad) in [Vec3::NAN, Vec3::INFINITY, Vec3::new(1e30, 0.0, -1e30)]
+            .into_iter()
+            .enumerate()
+        {
+            pts[count / 3 + 37 * k] = bad;
+        }
+        pts
+    }
+
+    /// Binds `tool` on every other point of `pts` and deforms all of them; every bound entry
+    /// and moved position must have the bits of the per-vertex code. Returns how many points
+    /// of positive weight the lanes bound (the rest were left to the per-vertex code).
+    fn lanes_match_the_vertex_code(tool: &AxialTool, pts: &[Vec3]) -> usize {
+        tool.validate("t").unwrap();
+        let topo = crate::mesh::Topology {
+            weld: vec![],
+            representative: vec![],
+            triangles: vec![],
+        };
+        let bound: Vec<u32> = (0..pts.len() as u32).step_by(2).collect();
+        let input = BindInput {
+            positions: pts,
+            topology: &topo,
+            active: &bound,
+        };
+        let bind = tool.bind(&input).unwrap();
+        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+        for &i in &bound {
+            let k = bind.slot[i as usize] as usize;
+            if bind.weight[k] <= 0.0 {
+                continue;
+            }
+            let (j, f) = (bind.segment[k] as usize, bind.fraction[k]);
+            let (l, b) = bind_vertex(&bind.rest, pts[i as usize], j, f);
+            assert_eq!(bits(bind.local[k]), bits(l), "local of {i}");
+            assert_eq!(bits(bind.base[k]), bits(b), "base of {i}");
+        }
+        let every: Vec<u32> = (0..pts.len() as u32).collect();
+        let mut out = vec![Vec3::ZERO; pts.len()];
+        tool.deform(&bind, pts, &every, &mut out);
+        let deformed = SampledAxis::new(
+            tool.shape,
+            &tool.deformed,
+            Some(bind.rest.first_frame()),
+            "",
+        )
+        .unwrap();
+        for (&i, o) in every.iter().zip(&out) {
+            let want = deform_vertex(&deformed, &bind, pts[i as usize], i);
+            assert_eq!(bits(*o), bits(want), "vertex {i}");
+        }
+        // How many points of positive weight the lanes bound.
+        let index = PolylineIndex::new(bind.rest.points.clone()).unwrap();
+        let xs: Vec<Vec3> = bound.iter().map(|&i| pts[i as usize]).collect();
+        let mut found = vec![(0, 0.0, 0.0); xs.len()];
+        index.closest_each(&xs, &mut found);
+        let ws: Vec<f32> = found
+            .iter()
+            .map(|&(_, _, d2)| tool.falloff.weight(d2.sqrt() / tool.radius, tool.inner))
+            .collect();
+        let n = xs.len();
+        let (mut ls, mut bs, mut done) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n], vec![false; n]);
+        bind.rest
+            .table()
+            .bind_each(&found, &xs, &ws, &mut ls, &mut bs, &mut done);
+        (0..n).filter(|&k| done[k] && ws[k] > 0.0).count()
+    }
+
+    #[test]
+    fn lane_groups_have_the_bits_of_the_vertex_code() {
+        let pts = spread(3001, 7);
+        let mut rest = line(5, Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0));
+        rest[1].position.y = 0.05;
+        rest[2].position.z = -0.1;
+        rest[3].position.y = -0.05;
+        let mut deformed = rest.clone();
+        deformed[3].position += Vec3::new(0.1, 0.3, -0.2);
+        deformed[4].position += Vec3::new(-0.2, 0.6, 0.1);
+        deformed[4].scale = 1.7;
+        deformed[1].scale = 0.6;
+        for shape in [
+            AxisShape::Polyline,
+            AxisShape::Bezier,
+            AxisShape::BSpline { degree: 3 },
+        ] {
+            for twist in [false, true] {
+                let mut tool = AxialTool {
+                    shape,
+                    deformed: deformed.clone(),
+                    ..AxialTool::new(rest.clone(), 0.45)
+                };
+                tool.rest[0].scale = 1.2;
+                if twist {
+                    // Twist on one point: the segments around it take the per-vertex code.
+                    tool.deformed[2].twist = 0.7;
+                }
+                let on_lanes = lanes_match_the_vertex_code(&tool, &pts);
+                // Most points go through the lanes (so the comparison above tests them).
+                assert!(
+                    on_lanes > 300,
+                    "{shape:?}, twist {twist}: {on_lanes} on lanes"
+                );
+            }
+        }
+        // A straight axis (frames all equal) and one along a coordinate axis (zeros in the
+        // frames, whose signs the products keep).
+        for (from, to) in [
+            (Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0)),
+            (Vec3::new(0.1, -0.3, 0.2), Vec3::new(1.9, 0.4, -0.1)),
+        ] {
+            let rest = line(5, from, to);
+            let mut deformed = rest.clone();
+            deformed[4].position.y += 0.5;
+            let tool = AxialTool {
+                deformed,
+                ..AxialTool::new(rest, 0.5)
+            };
+            let on_lanes = lanes_match_the_vertex_code(&tool, &pts);
+            assert!(
+                on_lanes > 300,
+                "straight from {from} to {to}: {on_lanes} on lanes"
+            );
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn lanes_match_the_vertex_code_on_any_axis(
+            shape in 0usize..3,
+            rest in prop::collection::vec(prop::array::uniform3(-1.0f32..1.0), 3..7),
+            moves in prop::collection::vec(prop::array::uniform3(-0.5f32..0.5), 7),
+            scales in prop::collection::vec(0.3f32..3.0, 7),
+            radius in 0.2f32..2.0,
+            seed in 1u32..1000,
+        ) {
+            let shape = [AxisShape::Polyline, AxisShape::Bezier, AxisShape::BSpline { degree: 2 }][shape];
+            let rest: Vec<AxisPoint> = rest
+                .iter()
+                .enumerate()
+                .map(|(k, p)| AxisPoint::at(Vec3::from(*p) + Vec3::X * k as f32))
+                .collect();
+            let deformed: Vec<AxisPoint> = rest
+                .iter()
+                .zip(&moves)
+                .zip(&scales)
+                .map(|((p, m), &s)| AxisPoint { position: p.position + Vec3::from(*m), twist: 0.0, scale: s })
+                .collect();
+            let tool = AxialTool { shape, deformed, ..AxialTool::new(rest, radius) };
+            if tool.validate("t").is_ok() {
+                let pts: Vec<Vec3> = spread(600, seed).iter().map(|p| *p * 3.0).collect();
+                lanes_match_the_vertex_code(&tool, &pts);
+            }
+        }
     }
 
     proptest! {

@@ -10,6 +10,7 @@
 #![warn(clippy::unwrap_used, clippy::expect_used)]
 
 pub mod axial;
+mod axial_lanes;
 pub mod basis;
 pub mod chunks;
 pub mod curve;

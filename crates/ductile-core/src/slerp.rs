@@ -14,6 +14,8 @@
 //! 11-degree minimax polynomial (DirectXMath's `XMVectorSin`), whose angle reduction leaves an
 //! angle in `[0, π/2]` unchanged. A test checks the bits against [`Quat::slerp`].
 
+use std::f32::consts::{FRAC_PI_2, PI};
+
 use glam::{Quat, Vec4};
 
 /// glam's threshold above which the ends are so close that it interpolates linearly.
@@ -95,16 +97,25 @@ impl SlerpArc {
 #[must_use]
 #[inline]
 fn sin_poly(x: f32) -> f32 {
-    use std::f32::consts::{FRAC_PI_2, PI};
     let x = if x <= FRAC_PI_2 { x } else { PI - x };
     let x2 = x * x;
-    let mut r = -2.388_985_9e-8 * x2 + 2.752_556_2e-6;
-    r = r * x2 + -0.000_198_408_74;
-    r = r * x2 + 0.008_333_331;
-    r = r * x2 + -0.166_666_67;
-    r = r * x2 + 1.0;
+    let mut r = SIN[0] * x2 + SIN[1];
+    for c in &SIN[2..] {
+        r = r * x2 + c;
+    }
     r * x
 }
+
+/// The coefficients of glam's sine polynomial in `x²`, highest power first (also in
+/// `axial_lanes.rs`'s registers).
+pub(crate) const SIN: [f32; 6] = [
+    -2.388_985_9e-8,
+    2.752_556_2e-6,
+    -0.000_198_408_74,
+    0.008_333_331,
+    -0.166_666_67,
+    1.0,
+];
 
 #[cfg(test)]
 mod tests {
