@@ -904,8 +904,9 @@ mod tests {
 
     /// Binds `tool` on every other point of `pts` and deforms all of them; every bound entry
     /// and moved position must have the bits of the per-vertex code. Returns how many points
-    /// of positive weight the lanes bound (the rest were left to the per-vertex code).
-    fn lanes_match_the_vertex_code(tool: &AxialTool, pts: &[Vec3]) -> usize {
+    /// of positive weight the registers bound, and how many such vertices they moved (the
+    /// rest were left to the per-vertex code).
+    fn lanes_match_the_vertex_code(tool: &AxialTool, pts: &[Vec3]) -> (usize, usize) {
         tool.validate("t").unwrap();
         let topo = crate::mesh::Topology {
             weld: vec![],
@@ -944,26 +945,49 @@ mod tests {
             let want = deform_vertex(&deformed, &bind, pts[i as usize], i);
             assert_eq!(bits(*o), bits(want), "vertex {i}");
         }
-        // How many points of positive weight the lanes bound.
+        // How many points of positive weight the registers bound and moved.
         let index = PolylineIndex::new(bind.rest.points.clone()).unwrap();
         let xs: Vec<Vec3> = bound.iter().map(|&i| pts[i as usize]).collect();
         let mut found = vec![(0, 0.0, 0.0); xs.len()];
         index.closest_each(&xs, &mut found);
+        let inv_r = 1.0 / tool.radius;
         let ws: Vec<f32> = found
             .iter()
-            .map(|&(_, _, d2)| tool.falloff.weight(d2.sqrt() / tool.radius, tool.inner))
+            .map(|&(_, _, d2)| tool.falloff.weight(d2.sqrt() * inv_r, tool.inner))
             .collect();
         let n = xs.len();
         let (mut ls, mut bs, mut done) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n], vec![false; n]);
         bind.rest
             .table()
             .bind_each(&found, &xs, &ws, &mut ls, &mut bs, &mut done);
-        (0..n).filter(|&k| done[k] && ws[k] > 0.0).count()
+        let bound_on_registers = (0..n).filter(|&k| done[k] && ws[k] > 0.0).count();
+        let mut done = vec![false; every.len()];
+        deformed
+            .table()
+            .deform_each(bind.arrays(), pts, &every, &mut out, &mut done);
+        let moved_on_registers = every
+            .iter()
+            .filter(|&&i| done[i as usize] && bind.weight(i) > 0.0)
+            .count();
+        (bound_on_registers, moved_on_registers)
+    }
+
+    /// At least `floor` where the CPU runs the register kernels, none elsewhere.
+    fn check_count(count: usize, floor: usize, what: &str) {
+        if crate::axial_lanes::registers_run() {
+            assert!(count > floor, "{what}: {count} on registers");
+        } else {
+            assert_eq!(count, 0, "{what}: without AVX2");
+        }
     }
 
     #[test]
     fn lane_groups_have_the_bits_of_the_vertex_code() {
-        let pts = spread(3001, 7);
+        // Points in random order (groups on several segments) and sorted along the axis
+        // (groups on one segment, broadcast).
+        let random = spread(3001, 7);
+        let mut sorted = random.clone();
+        sorted.sort_by(|a, b| a.x.total_cmp(&b.x));
         let mut rest = line(5, Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0));
         rest[1].position.y = 0.05;
         rest[2].position.z = -0.1;
@@ -973,48 +997,62 @@ mod tests {
         deformed[4].position += Vec3::new(-0.2, 0.6, 0.1);
         deformed[4].scale = 1.7;
         deformed[1].scale = 0.6;
-        for shape in [
-            AxisShape::Polyline,
-            AxisShape::Bezier,
-            AxisShape::BSpline { degree: 3 },
-        ] {
-            for twist in [false, true] {
-                let mut tool = AxialTool {
-                    shape,
-                    deformed: deformed.clone(),
-                    ..AxialTool::new(rest.clone(), 0.45)
-                };
-                tool.rest[0].scale = 1.2;
-                if twist {
-                    // Twist on one point: the segments around it take the per-vertex code.
-                    tool.deformed[2].twist = 0.7;
+        for (pts, in_order) in [(&random, false), (&sorted, true)] {
+            for shape in [
+                AxisShape::Polyline,
+                AxisShape::Bezier,
+                AxisShape::BSpline { degree: 3 },
+            ] {
+                for twist in [false, true] {
+                    let mut tool = AxialTool {
+                        shape,
+                        deformed: deformed.clone(),
+                        ..AxialTool::new(rest.clone(), 0.45)
+                    };
+                    tool.rest[0].scale = 1.2;
+                    if twist {
+                        // A twist on one point of each state: the segments it reaches (all
+                        // of a spline's) take the per-vertex code.
+                        tool.deformed[2].twist = 0.7;
+                        tool.rest[3].twist = -0.2;
+                    }
+                    let (bound, moved) = lanes_match_the_vertex_code(&tool, pts);
+                    // Most points go through the registers (so the comparison above tests
+                    // them); with twists, only the groups of sorted points on the polyline's
+                    // untwisted segments, and none of the splines'.
+                    let what = format!("{shape:?}, twist {twist}, in order {in_order}");
+                    if !twist || (shape == AxisShape::Polyline && in_order) {
+                        check_count(bound, 300, &format!("bind, {what}"));
+                        check_count(moved, 300, &format!("deform, {what}"));
+                    } else if shape != AxisShape::Polyline {
+                        assert_eq!((bound, moved), (0, 0), "{what}");
+                    }
                 }
-                let on_lanes = lanes_match_the_vertex_code(&tool, &pts);
-                // Most points go through the lanes (so the comparison above tests them).
-                assert!(
-                    on_lanes > 300,
-                    "{shape:?}, twist {twist}: {on_lanes} on lanes"
-                );
             }
         }
-        // A straight axis (frames all equal) and one along a coordinate axis (zeros in the
-        // frames, whose signs the products keep).
-        for (from, to) in [
-            (Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0)),
-            (Vec3::new(0.1, -0.3, 0.2), Vec3::new(1.9, 0.4, -0.1)),
+        // A straight axis along a coordinate axis (equal frames with zeros, whose signs the
+        // products keep) and one in general position (frames equal but for rounding: the
+        // normalised lerp).
+        for (from, to, kinds) in [
+            (Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), "same"),
+            (Vec3::new(0.1, -0.3, 0.2), Vec3::new(1.9, 0.4, -0.1), "lerp"),
         ] {
             let rest = line(5, from, to);
+            let table = SampledAxis::new(AxisShape::Polyline, &rest, None, "")
+                .unwrap()
+                .table();
+            assert_eq!(table.kinds(), kinds, "from {from} to {to}");
             let mut deformed = rest.clone();
             deformed[4].position.y += 0.5;
             let tool = AxialTool {
                 deformed,
                 ..AxialTool::new(rest, 0.5)
             };
-            let on_lanes = lanes_match_the_vertex_code(&tool, &pts);
-            assert!(
-                on_lanes > 300,
-                "straight from {from} to {to}: {on_lanes} on lanes"
-            );
+            for pts in [&random, &sorted] {
+                let (bound, moved) = lanes_match_the_vertex_code(&tool, pts);
+                check_count(bound, 300, &format!("bind from {from} to {to}"));
+                check_count(moved, 300, &format!("deform from {from} to {to}"));
+            }
         }
     }
 

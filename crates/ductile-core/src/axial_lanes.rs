@@ -1,6 +1,6 @@
 //! The axial tool's per-vertex work — the frame at a vertex's axis parameter, its local
 //! coordinates at bind time and its move at deform time — for a lane group of vertices at a
-//! time, on `lane.rs`'s lanes in [`pulp`]'s runtime dispatch.
+//! time, in `registers.rs`'s registers where [`pulp`]'s runtime dispatch finds AVX2.
 //!
 //! At fraction `f` of sample segment `j` the axis point is `A = P_j (1 − f) + P_{j+1} f`, the
 //! frame `R` the segment's slerp ([`SlerpArc`]), the scale `s = θ_j (1 − f) + θ_{j+1} f` and
@@ -10,13 +10,14 @@
 //! product with `Mat3::from_diagonal`, `Mat3 * Vec3`), so each vertex gets the bits of
 //! `SampledAxis::at_with_parts` and the per-vertex code; a test compares them.
 //!
-//! The lanes take a segment whose two ends have no twist and whose frames are equal or an
-//! arc apart ([`SlerpArc::Same`] or [`SlerpArc::Arc`]). A group with a segment of another kind
-//! (a twist, whose rotation about the tangent uses the standard library's sine, or frames
-//! nearly equal), or with a value that is not finite (whose NaN could take another payload in
-//! a vector register), is done vertex by vertex by the scalar code instead. The Add menu's
-//! axis is a polyline of four segments, so a group's vertices mostly share one segment, whose
-//! values are then broadcast instead of gathered lane by lane.
+//! The registers take a segment whose two ends have no twist, whatever its frames (equal, an
+//! arc apart or nearly equal: [`SlerpArc`]'s three kinds). A group with a twisted segment
+//! (whose rotation about the tangent uses the standard library's sine) or with a value that is
+//! not finite (whose NaN could take another payload in a vector register) is left to the
+//! per-vertex code, and so is everything on a CPU without AVX2 (where two registers do not
+//! hold a lane group). The Add menu's axis is a polyline of four segments, so a group's
+//! vertices mostly share one segment, whose values are then broadcast instead of gathered
+//! lane by lane.
 
 use glam::{Quat, Vec3};
 
@@ -65,7 +66,7 @@ struct Segment {
     /// The start frame and the arc's far end (the start again for [`Kind::Same`]).
     r: Quat,
     e: Quat,
-    /// `θ` and `sin θ` of the arc (0 and 1 for [`Kind::Same`]).
+    /// `θ` and `sin θ` of the arc (0 and 1 for the other kinds).
     theta: f32,
     sin_theta: f32,
 }
@@ -119,9 +120,14 @@ impl AxisTable {
         Self { segments }
     }
 
-    /// The segments of `js`, or `None` when one of them is not for the lanes.
+    /// The segments of `js` (gathered into `scratch` when they differ), or `None` when one of
+    /// them is not for the registers.
     #[inline(always)]
-    fn lanes(&self, js: &[u32; LANES]) -> Option<Segments<'_>> {
+    fn lanes<'a>(
+        &'a self,
+        js: &[u32; LANES],
+        scratch: &'a mut SegmentLanes,
+    ) -> Option<Segments<'a>> {
         let first = self.segments.get(js[0] as usize)?;
         if first.kind == Kind::Scalar {
             return None;
@@ -129,15 +135,37 @@ impl AxisTable {
         if js.iter().all(|&j| j == js[0]) {
             return Some(Segments::One(first));
         }
-        let mut lanes = SegmentLanes::splat(first);
+        scratch.has_arc = false;
+        scratch.has_lerp = false;
         for (i, &j) in js.iter().enumerate() {
             let g = self.segments.get(j as usize)?;
             if g.kind == Kind::Scalar {
                 return None;
             }
-            lanes.set(i, g);
+            scratch.set(i, g);
         }
-        Some(Segments::Each(Box::new(lanes)))
+        Some(Segments::Each(scratch))
+    }
+}
+
+#[cfg(test)]
+impl AxisTable {
+    /// The kinds of the segments: "same", "arc", "lerp" and "scalar" where every segment is
+    /// of that kind, "mixed" otherwise.
+    #[must_use]
+    pub(crate) fn kinds(&self) -> &'static str {
+        let name = |k: Kind| match k {
+            Kind::Same => "same",
+            Kind::Arc => "arc",
+            Kind::Lerp => "lerp",
+            Kind::Scalar => "scalar",
+        };
+        let first = self.segments[0].kind;
+        if self.segments.iter().all(|g| g.kind == first) {
+            name(first)
+        } else {
+            "mixed"
+        }
     }
 }
 
@@ -145,7 +173,7 @@ impl AxisTable {
 /// vertices share a segment), broadcast into registers, or one per lane.
 enum Segments<'a> {
     One(&'a Segment),
-    Each(Box<SegmentLanes>),
+    Each(&'a SegmentLanes),
 }
 
 impl Segments<'_> {
@@ -154,7 +182,7 @@ impl Segments<'_> {
     fn at<S: Simd>(&self, o: Ops<S>, f: R<S>) -> Frame<S> {
         match self {
             Segments::One(g) => frame_at(o, *g, f),
-            Segments::Each(g) => frame_at(o, &**g, f),
+            Segments::Each(g) => frame_at(o, *g, f),
         }
     }
 }
@@ -178,23 +206,20 @@ struct SegmentLanes {
 }
 
 impl SegmentLanes {
-    #[inline(always)]
-    fn splat(g: &Segment) -> Self {
-        let s = Lane::splat;
-        Self {
-            arc: s(g.kind.code()),
-            p0: Lanes3::splat(g.p0),
-            p1: Lanes3::splat(g.p1),
-            s0: s(g.s0),
-            s1: s(g.s1),
-            r: g.r.to_array().map(s),
-            e: g.e.to_array().map(s),
-            theta: s(g.theta),
-            sin_theta: s(g.sin_theta),
-            has_arc: g.kind == Kind::Arc,
-            has_lerp: g.kind == Kind::Lerp,
-        }
-    }
+    /// Every value 0: a kernel's scratch for groups on several segments.
+    const ZERO: Self = Self {
+        arc: Lane::ZERO,
+        p0: Lanes3::ZERO,
+        p1: Lanes3::ZERO,
+        s0: Lane::ZERO,
+        s1: Lane::ZERO,
+        r: [Lane::ZERO; 4],
+        e: [Lane::ZERO; 4],
+        theta: Lane::ZERO,
+        sin_theta: Lane::ZERO,
+        has_arc: false,
+        has_lerp: false,
+    };
 
     #[inline(always)]
     fn set(&mut self, i: usize, g: &Segment) {
@@ -521,10 +546,10 @@ fn finite<S: Simd>(o: Ops<S>, vs: &[&Block<S>]) -> bool {
 impl AxisTable {
     /// The local coordinates `l` and rest images `A + M l` of points `xs` whose closest axis
     /// points are `found` (segment, fraction, squared distance), written to `local` and
-    /// `base`, for every lane group that has a point of positive weight `ws`. `done[k]` tells
-    /// whether point `k`'s values were written, or are left to the scalar path (every slice
-    /// as long as `xs`). Where a point's weight is positive and `done` is true, the values
-    /// have the bits of the per-vertex bind.
+    /// `base` where the weight `ws` is positive. `done[k]` is true when point `k` needs no
+    /// per-vertex work: its values were written, or its weight is 0 or less (the bind keeps
+    /// nothing for it); false leaves it to the per-vertex code (every slice as long as `xs`).
+    /// Written values have the bits of the per-vertex bind.
     pub(crate) fn bind_each(
         &self,
         found: &[(usize, f32, f32)],
@@ -624,24 +649,35 @@ impl pulp::WithSimd for BindEach<'_> {
             .zip(self.local.chunks_mut(LANES))
             .zip(self.base.chunks_mut(LANES))
             .zip(self.done.chunks_mut(LANES));
+        let mut scratch = SegmentLanes::ZERO;
         for (((((xs, found), ws), local), base), done) in groups {
-            if ws.iter().all(|&w| w <= 0.0) {
-                done.fill(true);
+            // The lanes of positive weight; the others (whose values the bind does not keep)
+            // compute with the first of them. A NaN weight is kept by the bind: scalar path.
+            let Some(first) = ws.iter().position(|&w| w > 0.0) else {
+                let nan = ws.iter().any(|w| w.is_nan());
+                done.fill(!nan);
+                continue;
+            };
+            if ws.iter().any(|w| w.is_nan()) {
+                done.fill(false);
                 continue;
             }
             let n = xs.len();
             let mut js = [0u32; LANES];
             let mut f = Lane::ZERO;
+            let mut points = [Vec3::ZERO; LANES];
             for i in 0..LANES {
-                let (j, fi, _) = found[i.min(n - 1)];
+                let k = if i < n && ws[i] > 0.0 { i } else { first };
+                let (j, fi, _) = found[k];
                 js[i] = u32::try_from(j).unwrap_or(u32::MAX);
                 f.0[i] = fi;
+                points[i] = xs[k];
             }
-            let Some(segments) = self.table.lanes(&js) else {
+            let Some(segments) = self.table.lanes(&js, &mut scratch) else {
                 done.fill(false);
                 continue;
             };
-            let (u, f) = (regs3::<S>(&Lanes3::load(xs)), regs::<S>(&f));
+            let (u, f) = (regs3::<S>(&Lanes3::load(&points)), regs::<S>(&f));
             let frame = segments.at(o, f);
             // `l = S⁻¹ (R W)ᵀ (U − A)`: row `k` of the transpose is column `k` of `R`.
             let v = o.sub3(u, frame.a);
@@ -684,6 +720,7 @@ impl pulp::WithSimd for DeformEach<'_> {
         }
         let o = Ops(simd);
         let b = self.bind;
+        let mut scratch = SegmentLanes::ZERO;
         for ((ids, out), done) in self
             .active
             .chunks(LANES)
@@ -727,7 +764,7 @@ impl pulp::WithSimd for DeformEach<'_> {
                 let k = ks[i] as usize;
                 (js[i], f.0[i], w.0[i]) = (b.segment[k], b.fraction[k], b.weight[k]);
             }
-            let Some(segments) = self.table.lanes(&js) else {
+            let Some(segments) = self.table.lanes(&js, &mut scratch) else {
                 done.fill(false);
                 continue;
             };
@@ -748,4 +785,20 @@ impl pulp::WithSimd for DeformEach<'_> {
             done.fill(true);
         }
     }
+}
+
+/// Whether this CPU runs the register kernels (two registers hold a lane group: AVX2);
+/// elsewhere every vertex takes the per-vertex code.
+#[cfg(test)]
+#[must_use]
+pub(crate) fn registers_run() -> bool {
+    struct Probe;
+    impl pulp::WithSimd for Probe {
+        type Output = bool;
+        #[inline(always)]
+        fn with_simd<S: Simd>(self, _: S) -> bool {
+            2 * S::F32_LANES == LANES
+        }
+    }
+    pulp::Arch::new().dispatch(Probe)
 }

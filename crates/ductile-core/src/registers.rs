@@ -7,8 +7,9 @@
 //! Two independent registers per value let the core overlap one register's chain of
 //! dependent operations with the other's. The operations here are exactly rounded and never
 //! fused, so a kernel that takes the lanes' operations in the lanes' order gets their bits.
-//! Users: `ffsd/simd.rs` (FFSD deformation and nearest vertices) and `volume_lanes/simd.rs`
-//! (volume masks).
+//! Users: `ffsd/simd.rs` (FFSD deformation and nearest vertices), `volume_lanes/simd.rs`
+//! (volume masks) and `axial_lanes.rs` (the axial tool's frames, whose callers take the
+//! per-vertex code where there is no AVX2).
 
 use glam::Vec3;
 use pulp::Simd;
