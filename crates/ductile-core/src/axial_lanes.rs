@@ -635,8 +635,7 @@ impl pulp::WithSimd for BindEach<'_> {
 
     #[inline(always)]
     fn with_simd<S: Simd>(self, simd: S) {
-        // Lane groups in two registers (AVX2); elsewhere the scalar path does every point.
-        if 2 * S::F32_LANES != LANES {
+        if !holds_group::<S>() {
             self.done.fill(false);
             return;
         }
@@ -651,17 +650,17 @@ impl pulp::WithSimd for BindEach<'_> {
             .zip(self.done.chunks_mut(LANES));
         let mut scratch = SegmentLanes::ZERO;
         for (((((xs, found), ws), local), base), done) in groups {
-            // The lanes of positive weight; the others (whose values the bind does not keep)
-            // compute with the first of them. A NaN weight is kept by the bind: scalar path.
-            let Some(first) = ws.iter().position(|&w| w > 0.0) else {
-                let nan = ws.iter().any(|w| w.is_nan());
-                done.fill(!nan);
-                continue;
-            };
+            // A NaN weight is kept by the bind: scalar path. Of the others, the lanes of
+            // positive weight are bound; the rest (whose values the bind does not keep)
+            // compute with the first of them.
             if ws.iter().any(|w| w.is_nan()) {
                 done.fill(false);
                 continue;
             }
+            let Some(first) = ws.iter().position(|&w| w > 0.0) else {
+                done.fill(true);
+                continue;
+            };
             let n = xs.len();
             let mut js = [0u32; LANES];
             let mut f = Lane::ZERO;
@@ -714,7 +713,7 @@ impl pulp::WithSimd for DeformEach<'_> {
 
     #[inline(always)]
     fn with_simd<S: Simd>(self, simd: S) {
-        if 2 * S::F32_LANES != LANES {
+        if !holds_group::<S>() {
             self.done.fill(false);
             return;
         }
@@ -787,6 +786,13 @@ impl pulp::WithSimd for DeformEach<'_> {
     }
 }
 
+/// Whether two registers of `S` hold a lane group (AVX2): the kernels run only then, and
+/// leave every point to the per-vertex code elsewhere.
+#[inline(always)]
+const fn holds_group<S: Simd>() -> bool {
+    2 * S::F32_LANES == LANES
+}
+
 /// Whether this CPU runs the register kernels (two registers hold a lane group: AVX2);
 /// elsewhere every vertex takes the per-vertex code.
 #[cfg(test)]
@@ -797,7 +803,7 @@ pub(crate) fn registers_run() -> bool {
         type Output = bool;
         #[inline(always)]
         fn with_simd<S: Simd>(self, _: S) -> bool {
-            2 * S::F32_LANES == LANES
+            holds_group::<S>()
         }
     }
     pulp::Arch::new().dispatch(Probe)
