@@ -1,24 +1,27 @@
 //! [`CurvePieces::closest`] for a lane group of points at a time: the closest-point search of
-//! the curve binds on `lane.rs`'s lanes, in [`pulp`]'s runtime dispatch.
+//! the curve binds, in [`pulp`]'s runtime dispatch.
 //!
 //! The seed is the boundary polyline's closest point (`polyline_lanes.rs`); the Gauss–Newton
 //! steps `u ← u − (C − x)·C' / |C'|²` then run in every lane at once, each lane on its own
-//! piece: the piece's coefficients are gathered (with AVX2, where the lanes' pieces lie
-//! within 16 of each other, a run of pieces is loaded by columns and each lane picks its own
-//! by a register permutation; else lane by lane) and Horner's rule runs on the lanes. The
-//! kind of gather is chosen once per evaluation: a join of lanes from two kinds is compiled
-//! lane by lane, with the vectors built again after it. A lane stops where the scalar search
-//! stops (a zero or non-finite tangent, a NaN step, a step that brings the point no closer) and keeps its answer while the others go
-//! on. The piece a step lands in is computed in `f32`, where piece indices are exact
-//! integers (fewer than `2²⁴` pieces), with the scalar code's `min`s and clamps. Every lane
-//! does the scalar operations in their order, so each answer has the bits of
-//! [`CurvePieces::closest`]; a lane whose seed is not finite is answered by it.
+//! piece. Where the CPU has AVX2 they run in registers (`curve_lanes/steps.rs`): a piece's
+//! coefficients are broadcast when every lane is on it, a run of pieces is loaded by columns
+//! and each lane picks its own by a register permutation where the lanes' pieces lie within
+//! 16 of each other, and are gathered lane by lane otherwise. Elsewhere they run on
+//! `lane.rs`'s lanes, gathered lane by lane. A lane stops where the scalar search stops (a
+//! zero or non-finite tangent, a NaN step, a step that brings the point no closer) and keeps
+//! its answer while the others go on. The piece a step lands in is computed in `f32`, where
+//! piece indices are exact integers (fewer than `2²⁴` pieces), with the scalar code's `min`s
+//! and clamps. Every lane does the scalar operations in their order, so each answer has the
+//! bits of [`CurvePieces::closest`]; a lane whose seed is not finite is answered by it.
 
 use glam::Vec3;
 
 use crate::curve_pieces::{Closest, CurvePieces, REFINE_STEPS};
 use crate::frames::BOUND_BATCH;
 use crate::lane::{LANES, Lane, Lanes3, Mask, copy_prefix};
+
+#[cfg(target_arch = "x86_64")]
+mod steps;
 
 impl CurvePieces {
     /// [`CurvePieces::closest`] of every point of `xs`, written to `out` (as long as `xs`):
@@ -33,6 +36,19 @@ impl CurvePieces {
             xs,
             out,
             permute: Permute::detect(),
+        });
+    }
+
+    /// [`CurvePieces::closest_each`] on the lanes, as where the CPU has no AVX2 (so that the
+    /// tests check the lane form on every CPU).
+    #[cfg(test)]
+    fn closest_each_on_lanes(&self, xs: &[Vec3], out: &mut [(Closest, f32)]) {
+        assert_eq!(xs.len(), out.len(), "one answer per point");
+        pulp::Arch::new().dispatch(ClosestEach {
+            pieces: self,
+            xs,
+            out,
+            permute: Permute::NONE,
         });
     }
 
@@ -55,30 +71,13 @@ impl CurvePieces {
     }
 
     /// `(C(u), dC/du)` in each lane, on each lane's piece `k` (Horner's rule, as
-    /// [`CurvePieces::point_and_tangent`]).
+    /// [`CurvePieces::point_and_tangent`]), the coefficients gathered lane by lane (the lane
+    /// form runs where there is no AVX2, hence no register permutation).
     #[inline(always)]
-    fn point_and_tangent_lanes(&self, k: Lane, u: Lane, permute: Permute) -> (Lanes3, Lanes3) {
+    fn point_and_tangent_lanes(&self, k: Lane, u: Lane) -> (Lanes3, Lanes3) {
         let p = self.degree;
         let q = p.max(1);
-        let pieces = Pieces::new(k, self.count, permute);
-        // The branch taken once for the whole evaluation: Horner's rule then runs on
-        // registers (a join of lanes from two kinds of gather is compiled lane by lane).
-        #[cfg(target_arch = "x86_64")]
-        if let Some((v3, rel, wide)) = pieces.window {
-            let mut c = Lanes3::ZERO;
-            for i in (0..=p).rev() {
-                c = c
-                    .scale(u)
-                    .add(self.windowed(v3, i, pieces.first, rel, wide));
-            }
-            let mut d = Lanes3::ZERO;
-            for i in (0..q).rev() {
-                d = d
-                    .scale(u)
-                    .add(self.windowed(v3, p + 1 + i, pieces.first, rel, wide));
-            }
-            return (c, d);
-        }
+        let pieces = Pieces::new(k, self.count, Permute::NONE);
         let mut c = Lanes3::ZERO;
         for i in (0..=p).rev() {
             c = c.scale(u).add(pieces.gather(&self.curve, p + 1, i));
@@ -88,24 +87,6 @@ impl CurvePieces {
             d = d.scale(u).add(pieces.gather(&self.tangent, q, i));
         }
         (c, d)
-    }
-
-    /// Coefficient `column` of each lane's piece `first + rel[j]`, from the columns.
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    fn windowed(
-        &self,
-        v3: pulp::x86::V3,
-        column: usize,
-        first: usize,
-        rel: [core::arch::x86_64::__m256i; 2],
-        wide: bool,
-    ) -> Lanes3 {
-        Lanes3 {
-            x: permuted(v3, self.column_run(column, 0, first), rel, wide),
-            y: permuted(v3, self.column_run(column, 1, first), rel, wide),
-            z: permuted(v3, self.column_run(column, 2, first), rel, wide),
-        }
     }
 
     /// `(k, u)` with the end of an inner piece written as the start of the next one (the
@@ -121,17 +102,11 @@ impl CurvePieces {
     /// The closest points of a lane group whose seeds are finite (module documentation):
     /// each lane's piece, local parameter, point and squared distance.
     #[inline(always)]
-    fn closest_lanes(
-        &self,
-        x: &Lanes3,
-        seg: Lane,
-        frac: Lane,
-        permute: Permute,
-    ) -> (Lane, Lane, Lanes3, Lane) {
+    fn closest_lanes(&self, x: &Lanes3, seg: Lane, frac: Lane) -> (Lane, Lane, Lanes3, Lane) {
         let (zero, one) = (Lane::ZERO, Lane::splat(1.0));
         let last = Lane::splat((self.count - 1) as f32);
         let (mut k, mut u) = self.settled_lanes(seg, frac);
-        let (mut c, mut dc) = self.point_and_tangent_lanes(k, u, permute);
+        let (mut c, mut dc) = self.point_and_tangent_lanes(k, u);
         let mut best = c.sub(*x).length_squared();
         let mut going = !Mask::NONE;
         for _ in 0..REFINE_STEPS {
@@ -154,7 +129,7 @@ impl CurvePieces {
                 above.select((next - ahead).clamp01(), next),
             );
             let (kn, un) = self.settled_lanes(kn, un);
-            let (cn, dn) = self.point_and_tangent_lanes(kn, un, permute);
+            let (cn, dn) = self.point_and_tangent_lanes(kn, un);
             let d = cn.sub(*x).length_squared();
             going = going & d.simd_lt(best);
             best = going.select(d, best);
@@ -189,6 +164,12 @@ pub(crate) struct Permute {
 }
 
 impl Permute {
+    /// No permutation: the coefficients are gathered lane by lane.
+    pub(crate) const NONE: Self = Self {
+        #[cfg(target_arch = "x86_64")]
+        v3: None,
+    };
+
     /// The permutation where this CPU has it.
     pub(crate) fn detect() -> Self {
         Self {
@@ -260,37 +241,6 @@ impl Pieces {
     }
 }
 
-/// Lane `j` of the result is `run[rel[j]]` (`rel[j] < 16`, below 8 unless `wide`): the run
-/// loaded in one or two registers, each lane's value picked by `vpermps` (which reads the
-/// low three bits of the index) and, where `wide`, the register chosen by `rel[j] ≥ 8`.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn permuted(
-    v3: pulp::x86::V3,
-    run: &[f32],
-    rel: [core::arch::x86_64::__m256i; 2],
-    wide: bool,
-) -> Lane {
-    use core::arch::x86_64::__m256;
-    let low: __m256 = bytemuck::pod_read_unaligned(bytemuck::cast_slice(&run[..8]));
-    let mut out = [
-        v3.avx2._mm256_permutevar8x32_ps(low, rel[0]),
-        v3.avx2._mm256_permutevar8x32_ps(low, rel[1]),
-    ];
-    if wide {
-        let high: __m256 = bytemuck::pod_read_unaligned(bytemuck::cast_slice(&run[8..16]));
-        let seven = v3.avx._mm256_set1_epi32(7);
-        for (o, r) in out.iter_mut().zip(rel) {
-            let upper = v3
-                .avx
-                ._mm256_castsi256_ps(v3.avx2._mm256_cmpgt_epi32(r, seven));
-            let picked = v3.avx2._mm256_permutevar8x32_ps(high, r);
-            *o = v3.avx._mm256_blendv_ps(*o, picked, upper);
-        }
-    }
-    Lane(bytemuck::cast(out))
-}
-
 /// `a·b` in glam's order: `(ax bx + ay by) + az bz`.
 #[inline(always)]
 fn dot(a: Lanes3, b: Lanes3) -> Lane {
@@ -322,8 +272,16 @@ impl pulp::WithSimd for ClosestEach<'_> {
             let x = Lanes3::load(xs);
             let seeds = pieces.index.closest_lanes(&x, &mut bounds);
             let finite = seeds.d2.is_finite();
-            let (k, u, c, d2) =
-                pieces.closest_lanes(&x, seeds.segment, seeds.fraction, self.permute);
+            // With AVX2 the steps run on registers, else on the lanes (the same bits).
+            #[cfg(target_arch = "x86_64")]
+            let (k, u, c, d2) = match self.permute.v3 {
+                Some(v3) => {
+                    pieces.closest_registers(v3, &x, seeds.segment, seeds.fraction, self.permute)
+                }
+                None => pieces.closest_lanes(&x, seeds.segment, seeds.fraction),
+            };
+            #[cfg(not(target_arch = "x86_64"))]
+            let (k, u, c, d2) = pieces.closest_lanes(&x, seeds.segment, seeds.fraction);
             for (j, o) in out.iter_mut().enumerate() {
                 if !finite.lane(j) {
                     *o = pieces.closest(xs[j]);
@@ -402,13 +360,19 @@ mod tests {
         )
     }
 
+    /// Both forms of the steps (registers where the CPU has AVX2, and the lanes) give
+    /// every point the scalar search's bits.
     fn check(basis: CurveBasis, ctrl: &[Vec3], xs: &[Vec3]) -> Result<(), TestCaseError> {
         let evaluator = CurveEvaluator::new(basis, ctrl.len(), "test").unwrap();
         let pieces = CurvePieces::new(&evaluator, ctrl);
         let mut out = vec![(pieces.closest(Vec3::ZERO).0, 0.0); xs.len()];
+        let mut lanes = out.clone();
         pieces.closest_each(xs, &mut out);
-        for (x, o) in xs.iter().zip(&out) {
-            prop_assert_eq!(bits(o), bits(&pieces.closest(*x)), "x = {}", x);
+        pieces.closest_each_on_lanes(xs, &mut lanes);
+        for ((x, o), l) in xs.iter().zip(&out).zip(&lanes) {
+            let scalar = bits(&pieces.closest(*x));
+            prop_assert_eq!(bits(o), scalar, "x = {}", x);
+            prop_assert_eq!(bits(l), scalar, "lanes, x = {}", x);
         }
         Ok(())
     }

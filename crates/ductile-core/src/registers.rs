@@ -8,8 +8,9 @@
 //! dependent operations with the other's. The operations here are exactly rounded and never
 //! fused, so a kernel that takes the lanes' operations in the lanes' order gets their bits.
 //! Users: `ffsd/simd.rs` (FFSD deformation and nearest vertices), `volume_lanes/simd.rs`
-//! (volume masks) and `axial_lanes.rs` (the axial tool's frames, whose callers take the
-//! per-vertex code where there is no AVX2).
+//! (volume masks), `axial_lanes.rs` (the axial tool's frames, whose callers take the
+//! per-vertex code where there is no AVX2) and `curve_lanes/steps.rs` (the curve closest
+//! points' Gauss–Newton steps, on the lanes where there is no AVX2).
 
 use glam::Vec3;
 use pulp::Simd;
@@ -106,6 +107,24 @@ impl<S: Simd> Ops<S> {
     #[inline(always)]
     pub(crate) fn any(self, m: Two<S::m32s>) -> bool {
         self.0.first_true_m32s(self.0.or_m32s(m[0], m[1])) < S::F32_LANES
+    }
+
+    /// Each lane clamped to `[0, 1]` by two selects, NaN kept (as `f32::clamp(0, 1)` and
+    /// [`crate::lane::Lane::clamp01`]).
+    #[inline(always)]
+    pub(crate) fn clamp01(self, a: Two<S::f32s>) -> Two<S::f32s> {
+        let (zero, one) = (self.splat(0.0), self.splat(1.0));
+        let q = self.select(self.lt(a, zero), zero, a);
+        self.select(self.gt(q, one), one, q)
+    }
+
+    /// `a·b` in glam's order: `(ax bx + ay by) + az bz`.
+    #[inline(always)]
+    pub(crate) fn dot(self, a: Block<S>, b: Block<S>) -> Two<S::f32s> {
+        self.add(
+            self.add(self.mul(a.x, b.x), self.mul(a.y, b.y)),
+            self.mul(a.z, b.z),
+        )
     }
 
     /// `v` in every lane.
