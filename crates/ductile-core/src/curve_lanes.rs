@@ -7,7 +7,7 @@
 //! coefficients are broadcast when every lane is on it, a run of pieces is loaded by columns
 //! and each lane picks its own by a register permutation where the lanes' pieces lie within
 //! 16 of each other, and are gathered lane by lane otherwise. Elsewhere they run on
-//! `lane.rs`'s lanes, gathered lane by lane. A lane stops where the scalar search stops (a
+//! `lane.rs`'s lanes, broadcast or gathered lane by lane. A lane stops where the scalar search stops (a
 //! zero or non-finite tangent, a NaN step, a step that brings the point no closer) and keeps
 //! its answer while the others go on. The piece a step lands in is computed in `f32`, where
 //! piece indices are exact integers (fewer than `2²⁴` pieces), with the scalar code's `min`s
@@ -71,8 +71,9 @@ impl CurvePieces {
     }
 
     /// `(C(u), dC/du)` in each lane, on each lane's piece `k` (Horner's rule, as
-    /// [`CurvePieces::point_and_tangent`]), the coefficients gathered lane by lane (the lane
-    /// form runs where there is no AVX2, hence no register permutation).
+    /// [`CurvePieces::point_and_tangent`]), the coefficients broadcast when every lane is on
+    /// one piece and gathered lane by lane otherwise (the lane form runs where there is no
+    /// AVX2, hence no register permutation).
     #[inline(always)]
     fn point_and_tangent_lanes(&self, k: Lane, u: Lane) -> (Lanes3, Lanes3) {
         let p = self.degree;
@@ -153,10 +154,11 @@ fn indices(k: Lane, count: usize) -> [usize; LANES] {
     out
 }
 
-/// AVX2's register permutation, where the CPU has it (x86-64): the Gauss–Newton steps then
-/// take the coefficients of lanes whose pieces lie within 16 of each other from
-/// [`CurvePieces::columns`], loading the run of pieces and letting each lane pick its own
-/// (`vpermps`), in place of a load per lane and the shuffles that put the values in place.
+/// AVX2, where the CPU has it (x86-64): the Gauss–Newton steps then run in registers
+/// (`curve_lanes/steps.rs`) and take the coefficients of lanes whose pieces lie within 16 of
+/// each other from [`CurvePieces::columns`], loading the run of pieces and letting each lane
+/// pick its own (`vpermps`), in place of a load per lane and the shuffles that put the
+/// values in place.
 #[derive(Clone, Copy)]
 pub(crate) struct Permute {
     #[cfg(target_arch = "x86_64")]
@@ -252,6 +254,8 @@ struct ClosestEach<'a> {
     pieces: &'a CurvePieces,
     xs: &'a [Vec3],
     out: &'a mut [(Closest, f32)],
+    /// Whether the steps run in registers (x86-64 only; elsewhere on the lanes).
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     permute: Permute,
 }
 

@@ -246,6 +246,7 @@ impl CurvePieces {
     /// The 16 values of coordinate `c` of coefficient `column` ([`CurvePieces::columns`]) for
     /// the pieces `first..first + 16` (zeros past the last piece).
     #[inline(always)]
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))] // The curve steps' (x86-64).
     pub(crate) fn column_run(&self, column: usize, c: usize, first: usize) -> &[f32] {
         let start = (3 * column + c) * (self.count + COLUMN_PAD) + first;
         &self.columns[start..start + 16]

@@ -112,6 +112,7 @@ impl<S: Simd> Ops<S> {
     /// Each lane clamped to `[0, 1]` by two selects, NaN kept (as `f32::clamp(0, 1)` and
     /// [`crate::lane::Lane::clamp01`]).
     #[inline(always)]
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))] // The curve steps' (x86-64).
     pub(crate) fn clamp01(self, a: Two<S::f32s>) -> Two<S::f32s> {
         let (zero, one) = (self.splat(0.0), self.splat(1.0));
         let q = self.select(self.lt(a, zero), zero, a);
@@ -120,6 +121,7 @@ impl<S: Simd> Ops<S> {
 
     /// `a·b` in glam's order: `(ax bx + ay by) + az bz`.
     #[inline(always)]
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))] // The curve steps' (x86-64).
     pub(crate) fn dot(self, a: Block<S>, b: Block<S>) -> Two<S::f32s> {
         self.add(
             self.add(self.mul(a.x, b.x), self.mul(a.y, b.y)),

@@ -8,11 +8,11 @@
 //! so [`CurvePieces::closest`]'s): the Horner sums `c·u + cᵢ` from zero, the step
 //! `u − ((c − x)·c') / |c'|²` with glam's dot order, the piece a step lands in from `ceil` and
 //! `floor` (`vroundps`, exact as `f32::ceil` and `f32::floor`) and the lane form's `min` and
-//! clamps, and the same stopping rules. The coefficients are gathered as the lane form
-//! gathers them: one broadcast when every lane is on one piece, a register permutation of a
-//! run of pieces when they lie within 16 of each other, else lane by lane.
+//! clamps, and the same stopping rules. The coefficients are the lane form's table entries:
+//! one broadcast when every lane is on one piece, a register permutation of a run of pieces
+//! ([`CurvePieces::columns`]) when they lie within 16 of each other, else lane by lane.
 
-use core::arch::x86_64::__m256;
+use core::arch::x86_64::{__m256, __m256i};
 
 use pulp::x86::V3;
 use pulp::{f32x8, m32x8};
@@ -185,15 +185,15 @@ impl CurvePieces {
         (c, d)
     }
 
-    /// Coefficient `column` of each lane's piece `first + rel[j]` (the run of pieces loaded, each lane's own
-    /// picked by `vpermps`).
+    /// Coefficient `column` of each lane's piece `first + rel[j]`: the run of pieces loaded,
+    /// each lane's own picked by `vpermps`.
     #[inline(always)]
     fn window_column(
         &self,
         v3: V3,
         column: usize,
         first: usize,
-        rel: [core::arch::x86_64::__m256i; 2],
+        rel: [__m256i; 2],
         wide: bool,
     ) -> Block<V3> {
         Block {
@@ -208,13 +208,7 @@ impl CurvePieces {
 /// loaded in one or two registers, each lane's value picked by `vpermps` (which reads the
 /// low three bits of the index) and, where `wide`, the register chosen by `rel[j] ≥ 8`.
 #[inline(always)]
-fn permuted(
-    v3: V3,
-    run: &[f32],
-    rel: [core::arch::x86_64::__m256i; 2],
-    wide: bool,
-) -> [core::arch::x86_64::__m256; 2] {
-    use core::arch::x86_64::__m256;
+fn permuted(v3: V3, run: &[f32], rel: [__m256i; 2], wide: bool) -> [__m256; 2] {
     let low: __m256 = bytemuck::pod_read_unaligned(bytemuck::cast_slice(&run[..8]));
     let mut out = [
         v3.avx2._mm256_permutevar8x32_ps(low, rel[0]),
