@@ -282,18 +282,7 @@ pub fn select_on_press(
             continue;
         }
         match (handles.get(press.entity), nodes.get(press.entity)) {
-            (Ok(h), _) => {
-                let same_node = selection.is_selected(&h.node);
-                selection.select(Some(h.node.clone()));
-                if shift && same_node {
-                    if !selection.handles.remove(&h.id) {
-                        selection.handles.insert(h.id);
-                    }
-                } else if !selection.handles.contains(&h.id) {
-                    selection.handles.clear();
-                    selection.handles.insert(h.id);
-                }
-            }
+            (Ok(h), _) => selection.press_handle(&h.node, h.id, shift),
             (_, Ok(n)) if !selection.is_selected(&n.name) => {
                 selection.select(Some(n.name.clone()));
             }

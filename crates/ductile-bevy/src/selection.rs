@@ -38,6 +38,23 @@ impl Selection {
         self.node = node;
     }
 
+    /// A primary press on handle `id` of `node`: selects the node and the handle. With
+    /// `shift` on the selected node, adds the handle to the selected ones, or removes it if
+    /// it was among them; without, a handle already selected keeps the group (a drag of it
+    /// moves them all), another one replaces it.
+    pub fn press_handle(&mut self, node: &str, id: HandleId, shift: bool) {
+        let same_node = self.is_selected(node);
+        self.select(Some(node.to_owned()));
+        if shift && same_node {
+            if !self.handles.remove(&id) {
+                self.handles.insert(id);
+            }
+        } else if !self.handles.contains(&id) {
+            self.handles.clear();
+            self.handles.insert(id);
+        }
+    }
+
     /// True when `node` is hidden.
     #[must_use]
     pub fn is_hidden(&self, node: &str) -> bool {
@@ -79,5 +96,49 @@ pub fn apply_hidden(
             Visibility::Inherited
         };
         visibility.set_if_neq(wanted);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn handles(s: &Selection) -> Vec<HandleId> {
+        s.handles.iter().copied().collect()
+    }
+
+    #[test]
+    fn shift_presses_add_and_remove_handles_and_a_plain_press_keeps_or_replaces_the_group() {
+        let mut s = Selection::default();
+        s.press_handle("lattice", HandleId::Lattice(0, 0, 0), false);
+        assert!(s.is_selected("lattice"));
+        assert_eq!(handles(&s), [HandleId::Lattice(0, 0, 0)]);
+        // Shift adds, on the same node.
+        s.press_handle("lattice", HandleId::Lattice(1, 0, 0), true);
+        s.press_handle("lattice", HandleId::Lattice(2, 0, 0), true);
+        assert_eq!(
+            handles(&s),
+            [
+                HandleId::Lattice(0, 0, 0),
+                HandleId::Lattice(1, 0, 0),
+                HandleId::Lattice(2, 0, 0)
+            ]
+        );
+        // Shift on a selected handle removes it.
+        s.press_handle("lattice", HandleId::Lattice(1, 0, 0), true);
+        assert_eq!(
+            handles(&s),
+            [HandleId::Lattice(0, 0, 0), HandleId::Lattice(2, 0, 0)]
+        );
+        // A plain press on a selected handle keeps the group (to drag it).
+        s.press_handle("lattice", HandleId::Lattice(2, 0, 0), false);
+        assert_eq!(s.handles.len(), 2);
+        // A plain press on another handle replaces the group.
+        s.press_handle("lattice", HandleId::Lattice(3, 1, 0), false);
+        assert_eq!(handles(&s), [HandleId::Lattice(3, 1, 0)]);
+        // Shift on another node's handle selects that node and that handle alone.
+        s.press_handle("curve", HandleId::Deformed(2), true);
+        assert!(s.is_selected("curve"));
+        assert_eq!(handles(&s), [HandleId::Deformed(2)]);
     }
 }

@@ -22,8 +22,10 @@ use super::add_menu::{AddRequest, add_menu_contents};
 use super::history::HistoryPanel;
 use super::inspector::Inspector;
 use super::macros::{MacrosPanel, random_face};
+use super::menu_bar::{MenuAction, MenuBar, ViewOptions};
 use super::outliner::Outliner;
 use super::stack::StackPanel;
+use super::status_bar::{StatusBar, StatusInfo};
 use super::timeline::TimelinePanel;
 use super::variants::VariantsPanel;
 use super::{Gestures, PanelContext, PanelRequest};
@@ -1221,4 +1223,88 @@ fn the_outliner_filters_hides_and_reparents_by_dragging() {
     h.run();
     h.run();
     assert_eq!(h.get_all_by_label("🗑").count(), 2, "m and v");
+}
+
+/// What a menu bar test keeps between frames: the document, the view toggles and the
+/// actions picked.
+struct MenuState {
+    doc: SceneDocument,
+    view: ViewOptions,
+    heat: HeatMapSettings,
+    actions: Vec<MenuAction>,
+}
+
+#[test]
+fn the_menu_bar_undoes_the_named_step_adds_a_tool_and_toggles_the_view() {
+    let mut doc = SceneDocument::new(document());
+    let op = Operation::set_volume(doc.document(), "v", Shape::Sphere { radius: 2.0 }).unwrap();
+    doc.apply(op, "resize v", None).unwrap();
+    let state = MenuState {
+        doc,
+        view: ViewOptions::default(),
+        heat: HeatMapSettings::default(),
+        actions: Vec::new(),
+    };
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(900.0, 700.0))
+        .build_ui_state(
+            |ui, s: &mut MenuState| {
+                let picked = MenuBar.show(ui, &s.doc, false, true, &mut s.view, &mut s.heat);
+                s.actions.extend(picked);
+            },
+            state,
+        );
+    // Edit: Undo names the step it undoes.
+    h.get_by_label("Edit").click();
+    h.run();
+    h.get_by_label_contains("Undo ").click();
+    h.run();
+    assert_eq!(h.state().actions, [MenuAction::Undo]);
+    // Add ▸ a lattice: the request the Studio turns into one undo step.
+    h.get_by_label("Add").click();
+    h.run();
+    h.get_by_label("Lattice (Bernstein)").click();
+    h.run();
+    assert_eq!(
+        h.state().actions[1..],
+        [MenuAction::Add(AddRequest::Tool(NewTool::Lattice(
+            LatticeKind::Bernstein
+        )))]
+    );
+    // View: a toggle changes the view options, not the document.
+    h.get_by_label("View").click();
+    h.run();
+    h.get_by_label("Wireframe").click();
+    h.run();
+    assert!(h.state().view.wireframe);
+    assert_eq!(h.state().actions.len(), 2);
+    assert_eq!(h.state().doc.history().len(), 1);
+}
+
+#[test]
+fn the_status_bar_shows_the_file_counts_evaluation_drag_and_error() {
+    let info = StatusInfo {
+        vertices: 8844,
+        triangles: 17_684,
+        evaluation: Some(("head".to_owned(), 1.25, 3, true)),
+        frame_ms: Some(16.7),
+        drag: Some("X"),
+        evaluating: false,
+        error: Some("scene.ron: line 3: expected a number".to_owned()),
+        file: "scene.ron".to_owned(),
+        modified: true,
+        export: None,
+    };
+    let h = Harness::new_ui_state(|ui, info: &mut StatusInfo| StatusBar.show(ui, info), info);
+    for label in [
+        "scene.ron •",
+        "8844 vertices",
+        "17684 triangles",
+        "eval 'head': 1.25 ms (3 layers, background)",
+        "frame 16.7 ms",
+        "drag: X (X/Y/Z constrain, Ctrl snaps)",
+        "scene.ron: line 3: expected a number",
+    ] {
+        h.get_by_label(label);
+    }
 }
