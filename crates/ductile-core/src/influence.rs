@@ -1173,6 +1173,27 @@ pub(crate) mod tests {
         }
     }
 
+    /// Marking flags the chunks that hold one of the changed vertices, and no other, whatever
+    /// the list's order.
+    #[test]
+    fn marking_flags_exactly_the_chunks_of_the_changed_vertices() {
+        let n = 40 * CHUNK + 17;
+        let positions = vec![Vec3::ZERO; n];
+        // Dense in chunks 3..12, one vertex in chunk 20, the very last vertex; none elsewhere.
+        let mut changed: Vec<u32> = (3 * CHUNK as u32..12 * CHUNK as u32).step_by(2).collect();
+        changed.extend([20 * CHUNK as u32 + 5, n as u32 - 1]);
+        let expected: Vec<bool> = (0..n.div_ceil(CHUNK))
+            .map(|c| changed.iter().any(|&i| i as usize / CHUNK == c))
+            .collect();
+        let mut ascending = ChunkBounds::new(&positions);
+        ascending.mark(&changed);
+        assert_eq!(ascending.stale, expected);
+        let mut reversed = ChunkBounds::new(&positions);
+        changed.reverse();
+        reversed.mark(&changed);
+        assert_eq!(reversed.stale, expected);
+    }
+
     /// The placement the shape tests put their volumes at: scaled, rotated and moved.
     pub(crate) fn placement() -> Affine3A {
         Affine3A::from_scale_rotation_translation(

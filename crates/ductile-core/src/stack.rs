@@ -263,8 +263,7 @@ impl LayerBinding {
         }
         let active: Vec<u32> = at.iter().map(|&k| self.mask.indices[k as usize]).collect();
         let mut out = zeroed(active.len());
-        deform_chunks(&layer.tool, bind, positions, &active, &mut out);
-        if let Some(k) = first_non_finite(&out) {
+        if let Some(k) = deform_chunks(&layer.tool, bind, positions, &active, &mut out) {
             return Err(CoreError::Degenerate {
                 what: format!("layer '{}'", layer.name),
                 problem: format!(
@@ -291,15 +290,20 @@ impl LayerBinding {
         refine: bool,
     ) -> Result<WholeDeform> {
         let active = &self.mask.indices;
-        let result = match layer.tool.deform_whole(bind, positions, refine) {
-            Some(r) => r?,
+        let (result, bad) = match layer.tool.deform_whole(bind, positions, refine) {
+            Some(r) => {
+                let r = r?;
+                let bad = first_non_finite(&r.out);
+                (r, bad)
+            }
             None => {
                 let mut out = zeroed(active.len());
-                deform_chunks(&layer.tool, bind, positions, active, &mut out);
-                WholeDeform {
+                let bad = deform_chunks(&layer.tool, bind, positions, active, &mut out);
+                let r = WholeDeform {
                     out,
                     refinement: None,
-                }
+                };
+                (r, bad)
             }
         };
         if result.out.len() != active.len() {
@@ -312,7 +316,7 @@ impl LayerBinding {
                 ),
             });
         }
-        if let Some(k) = first_non_finite(&result.out) {
+        if let Some(k) = bad {
             return Err(CoreError::Degenerate {
                 what: format!("layer '{}'", layer.name),
                 problem: format!(
@@ -350,20 +354,27 @@ fn first_non_finite(out: &[Vec3]) -> Option<usize> {
 }
 
 /// A per-vertex tool's output for `active`, in parallel chunks above
-/// [`PARALLEL_THRESHOLD`] vertices.
+/// [`PARALLEL_THRESHOLD`] vertices; returns the position in `out` of its first non-finite
+/// output (each chunk checks its own while it is in the cache).
 fn deform_chunks(
     tool: &Tool,
     bind: &ToolBind,
     positions: &[Vec3],
     active: &[u32],
     out: &mut [Vec3],
-) {
+) -> Option<usize> {
     if active.len() >= PARALLEL_THRESHOLD {
         out.par_chunks_mut(CHUNK)
             .zip(active.par_chunks(CHUNK))
-            .for_each(|(o, a)| tool.deform(bind, positions, a, o));
+            .enumerate()
+            .filter_map(|(c, (o, a))| {
+                tool.deform(bind, positions, a, o);
+                first_non_finite(o).map(|j| c * CHUNK + j)
+            })
+            .min()
     } else {
         tool.deform(bind, positions, active, out);
+        first_non_finite(out)
     }
 }
 
@@ -540,6 +551,37 @@ mod tests {
         assert_eq!(bits(&rec.saved), bits(&gather_at(&input, idx)));
         assert_eq!(bits(&rec.written), bits(&gather_at(&plain, idx)));
         assert!(rec.saved.iter().zip(&rec.written).any(|(a, b)| a != b));
+    }
+
+    /// A per-vertex layer over a parallel number of vertices, two of whose inputs are not
+    /// finite (in different chunks, the later chunk's first): the error names the first.
+    #[test]
+    fn a_non_finite_output_is_named_by_its_first_vertex_on_the_parallel_path() {
+        use crate::ffsd::{ControlPoint, FfsdTool};
+        let mesh = crate::primitives::grid(200, 200, false, |r, c| {
+            Vec3::new(c as f32 / 100.0, r as f32 / 100.0, 0.0)
+        });
+        let rest = RestMesh::new(mesh, "sheet").unwrap();
+        let tool = FfsdTool::new(vec![ControlPoint::basic(
+            Vec3::new(1.0, 1.0, 0.3),
+            0.4,
+            2.0,
+            0.3,
+        )]);
+        let layer = Layer::new("bump", Tool::Ffsd(tool));
+        let mut input = rest.welded_positions().to_vec();
+        let binding = LayerBinding::bind(&layer, &input, rest.topology()).unwrap();
+        assert!(binding.mask.len() > PARALLEL_THRESHOLD + CHUNK);
+        let (early, late) = (2 * CHUNK + 100, 5 * CHUNK + 3);
+        input[late].x = f32::NAN;
+        input[early].z = f32::INFINITY;
+        for result in [
+            binding.apply(&layer, &mut input.clone()),
+            binding.apply_refining(&layer, &mut input.clone()).map(|_| ()),
+        ] {
+            let message = result.unwrap_err().to_string();
+            assert!(message.contains(&format!("vertex {early}")), "{message}");
+        }
     }
 
     #[test]
