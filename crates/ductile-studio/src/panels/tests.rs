@@ -1192,6 +1192,59 @@ fn the_stack_panel_enables_weighs_and_reorders_by_dragging() {
     );
 }
 
+/// A layer whose name is wider than the panel: its controls stay in the panel, at the
+/// places the other rows have them, and its name is cut short; clicking it selects it.
+#[test]
+fn a_long_layer_name_is_cut_short_and_leaves_the_controls_in_the_panel() {
+    let mut state = State::new(StackPanel::default());
+    let (op, _) = Operation::duplicate_layer(state.doc.document(), "m", 0).unwrap();
+    state.doc.apply(op, "", None).unwrap();
+    let long = "the-left-eyebrow-ridge-prominence-and-the-brow-height-together";
+    state
+        .doc
+        .apply(Operation::rename("p", long), "", None)
+        .unwrap();
+    let width = 320.0;
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(width, 400.0))
+        .build_ui_state(
+            |ui, s: &mut State<StackPanel>| {
+                let mut cx = PanelContext {
+                    doc: &s.doc,
+                    selection: &mut s.selection,
+                    commands: Vec::new(),
+                    requests: Vec::new(),
+                    gestures: &mut s.gestures,
+                    now: s.now,
+                    meshes: &s.meshes,
+                };
+                s.panel.show(ui, &mut cx);
+                s.commands.extend(cx.commands);
+            },
+            state,
+        );
+    h.run();
+    let bins: Vec<egui::Rect> = h.get_all_by_label("🗑").map(|n| n.rect()).collect();
+    assert_eq!(bins.len(), 2);
+    for b in &bins {
+        assert!(
+            b.right() <= width,
+            "a remove button ends at {} of {width}",
+            b.right()
+        );
+    }
+    assert_eq!(bins[0].left(), bins[1].left(), "the rows' controls line up");
+    let name = h.get_by_label(long).rect();
+    let weight = h.get_all(spin_button(1.0)).next().unwrap().rect();
+    assert!(
+        name.right() <= weight.left(),
+        "{name:?} runs under {weight:?}"
+    );
+    h.get_by_label(long).click();
+    h.run();
+    assert_eq!(h.state().selection.layer, Some(("m".to_owned(), 0)));
+}
+
 #[test]
 fn the_outliner_filters_hides_and_reparents_by_dragging() {
     let mut h = harness(State::new(Outliner::default()), |p, ui, cx| p.show(ui, cx));
