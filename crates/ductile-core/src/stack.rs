@@ -577,7 +577,9 @@ mod tests {
         input[early].z = f32::INFINITY;
         for result in [
             binding.apply(&layer, &mut input.clone()),
-            binding.apply_refining(&layer, &mut input.clone()).map(|_| ()),
+            binding
+                .apply_refining(&layer, &mut input.clone())
+                .map(|_| ()),
         ] {
             let message = result.unwrap_err().to_string();
             assert!(message.contains(&format!("vertex {early}")), "{message}");
