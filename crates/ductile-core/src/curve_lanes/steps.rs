@@ -154,6 +154,9 @@ impl CurvePieces {
         let pieces = Pieces::new(lane(k), self.count, permute);
         let zero = o.splat3(glam::Vec3::ZERO);
         let (mut c, mut d) = (zero, zero);
+        // Three Horner loops, one per way of taking the coefficients, on purpose: one loop
+        // taking them from a closure ran the closest-point bench 5.4 times slower (closures
+        // do not inherit the caller's target features, so their intrinsics became calls).
         if pieces.same {
             let (curve, tangent) = (
                 &self.curve[pieces.first * (p + 1)..],
