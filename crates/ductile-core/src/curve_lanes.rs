@@ -7,9 +7,9 @@
 //! coefficients are broadcast when every lane is on it, a run of pieces is loaded by columns
 //! and each lane picks its own by a register permutation where the lanes' pieces lie within
 //! 16 of each other, and are gathered lane by lane otherwise. Elsewhere they run on
-//! `lane.rs`'s lanes, broadcast or gathered lane by lane. A lane stops where the scalar search stops (a
-//! zero or non-finite tangent, a NaN step, a step that brings the point no closer) and keeps
-//! its answer while the others go on. The piece a step lands in is computed in `f32`, where
+//! `lane.rs`'s lanes, broadcast or gathered lane by lane. A lane stops where the scalar
+//! search stops (a zero or non-finite tangent, a NaN step, a step that brings the point no
+//! closer) and keeps its answer while the others go on. The piece a step lands in is computed in `f32`, where
 //! piece indices are exact integers (fewer than `2²⁴` pieces), with the scalar code's `min`s
 //! and clamps. Every lane does the scalar operations in their order, so each answer has the
 //! bits of [`CurvePieces::closest`]; a lane whose seed is not finite is answered by it.

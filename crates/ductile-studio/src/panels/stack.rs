@@ -129,71 +129,95 @@ impl StackPanel {
         // The controls sit at the row's right end, in the same place on every row; the
         // name takes the space between them and the solo button.
         ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
-            if ui
-                .small_button("🗑")
-                .on_hover_text("Remove the layer (the tool node stays)")
-                .clicked()
-                && let Ok(op) = Operation::remove_layer(doc, mesh_name, i)
-            {
-                cx.apply(op);
-                if cx.selection.layer == Some((mesh_name.to_owned(), i)) {
-                    cx.selection.layer = None;
-                }
-            }
-            if ui
-                .add_enabled(i + 1 < count, egui::Button::new("⏶").small())
-                .on_hover_text("Move up")
-                .clicked()
-            {
-                cx.apply(Operation::move_layer(mesh_name, i, i + 1));
-            }
-            if ui
-                .add_enabled(i > 0, egui::Button::new("⏷").small())
-                .on_hover_text("Move down")
-                .clicked()
-            {
-                cx.apply(Operation::move_layer(mesh_name, i, i - 1));
-            }
-            if ui
-                .small_button("📋")
-                .on_hover_text("Duplicate the layer and its tool")
-                .clicked()
-                && let Ok((op, copy)) = Operation::duplicate_layer(doc, mesh_name, i)
-            {
-                cx.apply(op);
-                cx.selection.layer = Some((mesh_name.to_owned(), i + 1));
-                cx.selection.select(Some(copy));
-            }
-            let mut weight = layer.weight;
-            let r = ui.add(
-                egui::DragValue::new(&mut weight)
-                    .range(0.0..=1.0)
-                    .speed(0.005)
-                    .prefix("w "),
-            );
-            if r.changed()
-                && let Ok(op) = Operation::set_layer_weight(doc, mesh_name, i, weight)
-            {
-                let label = format!("weight of layer {i} of '{mesh_name}'");
-                cx.apply_in_gesture(&r, op, label);
-            }
+            Self::controls(ui, cx, mesh_name, i, layer, count);
             ui.with_layout(egui::Layout::left_to_right(egui::Align::Center), |ui| {
-                let selected = cx.selection.layer == Some((mesh_name.to_owned(), i));
-                // The name fills what the controls leave, cut short with "…" when it does
-                // not fit (the full name and the influence on hover).
-                let label = ui
-                    .add(egui::Button::selectable(selected, &layer.tool).truncate())
-                    .on_hover_text(format!(
-                        "{}: {}",
-                        layer.tool,
-                        influence_summary(layer.influence.as_ref())
-                    ));
-                if label.clicked() {
-                    cx.selection.layer = Some((mesh_name.to_owned(), i));
-                    cx.selection.select(Some(layer.tool.clone()));
-                }
+                Self::name(ui, cx, mesh_name, i, layer);
             });
         });
+    }
+
+    /// A row's weight, duplicate, move and remove controls, added right to left.
+    fn controls(
+        ui: &mut egui::Ui,
+        cx: &mut PanelContext<'_>,
+        mesh_name: &str,
+        i: usize,
+        layer: &LayerSpec,
+        count: usize,
+    ) {
+        let doc = cx.doc.shown();
+        if ui
+            .small_button("🗑")
+            .on_hover_text("Remove the layer (the tool node stays)")
+            .clicked()
+            && let Ok(op) = Operation::remove_layer(doc, mesh_name, i)
+        {
+            cx.apply(op);
+            if cx.selection.layer == Some((mesh_name.to_owned(), i)) {
+                cx.selection.layer = None;
+            }
+        }
+        if ui
+            .add_enabled(i + 1 < count, egui::Button::new("⏶").small())
+            .on_hover_text("Move up")
+            .clicked()
+        {
+            cx.apply(Operation::move_layer(mesh_name, i, i + 1));
+        }
+        if ui
+            .add_enabled(i > 0, egui::Button::new("⏷").small())
+            .on_hover_text("Move down")
+            .clicked()
+        {
+            cx.apply(Operation::move_layer(mesh_name, i, i - 1));
+        }
+        if ui
+            .small_button("📋")
+            .on_hover_text("Duplicate the layer and its tool")
+            .clicked()
+            && let Ok((op, copy)) = Operation::duplicate_layer(doc, mesh_name, i)
+        {
+            cx.apply(op);
+            cx.selection.layer = Some((mesh_name.to_owned(), i + 1));
+            cx.selection.select(Some(copy));
+        }
+        let mut weight = layer.weight;
+        let r = ui.add(
+            egui::DragValue::new(&mut weight)
+                .range(0.0..=1.0)
+                .speed(0.005)
+                .prefix("w "),
+        );
+        if r.changed()
+            && let Ok(op) = Operation::set_layer_weight(doc, mesh_name, i, weight)
+        {
+            let label = format!("weight of layer {i} of '{mesh_name}'");
+            cx.apply_in_gesture(&r, op, label);
+        }
+    }
+
+    /// A row's layer name, selecting the layer and its tool when clicked.
+    fn name(
+        ui: &mut egui::Ui,
+        cx: &mut PanelContext<'_>,
+        mesh_name: &str,
+        i: usize,
+        layer: &LayerSpec,
+    ) {
+        let selected = cx.selection.layer == Some((mesh_name.to_owned(), i));
+        // The name fills what the controls leave, cut short with "…" when it does
+        // not fit (the full name and the influence on hover).
+        let label = ui
+            .add(egui::Button::selectable(selected, &layer.tool).truncate())
+            .on_hover_text(format!(
+                "{}: {}",
+                layer.tool,
+                influence_summary(layer.influence.as_ref())
+            ));
+        if label.clicked() {
+            cx.selection.layer = Some((mesh_name.to_owned(), i));
+            cx.selection.select(Some(layer.tool.clone()));
+        }
     }
 
     /// Adds a layer for any tool node.

@@ -157,28 +157,35 @@ fn slow_drag<P>(
 /// A harness drawing `show` with a panel context built from the state each frame.
 fn harness<'a, P: 'a>(
     state: State<P>,
+    show: impl FnMut(&mut P, &mut egui::Ui, &mut PanelContext<'_>) + 'a,
+) -> Harness<'a, State<P>> {
+    harness_sized(state, egui::vec2(900.0, 900.0), show)
+}
+
+/// [`harness`] in a window of `size`.
+fn harness_sized<'a, P: 'a>(
+    state: State<P>,
+    size: egui::Vec2,
     mut show: impl FnMut(&mut P, &mut egui::Ui, &mut PanelContext<'_>) + 'a,
 ) -> Harness<'a, State<P>> {
-    Harness::builder()
-        .with_size(egui::vec2(900.0, 900.0))
-        .build_ui_state(
-            move |ui, s: &mut State<P>| {
-                let mut cx = PanelContext {
-                    doc: &s.doc,
-                    selection: &mut s.selection,
-                    commands: Vec::new(),
-                    requests: Vec::new(),
-                    gestures: &mut s.gestures,
-                    now: s.now,
-                    meshes: &s.meshes,
-                };
-                show(&mut s.panel, ui, &mut cx);
-                let (commands, requests) = (cx.commands, cx.requests);
-                s.commands.extend(commands);
-                s.requests.extend(requests);
-            },
-            state,
-        )
+    Harness::builder().with_size(size).build_ui_state(
+        move |ui, s: &mut State<P>| {
+            let mut cx = PanelContext {
+                doc: &s.doc,
+                selection: &mut s.selection,
+                commands: Vec::new(),
+                requests: Vec::new(),
+                gestures: &mut s.gestures,
+                now: s.now,
+                meshes: &s.meshes,
+            };
+            show(&mut s.panel, ui, &mut cx);
+            let (commands, requests) = (cx.commands, cx.requests);
+            s.commands.extend(commands);
+            s.requests.extend(requests);
+        },
+        state,
+    )
 }
 
 #[test]
@@ -1205,24 +1212,7 @@ fn a_long_layer_name_is_cut_short_and_leaves_the_controls_in_the_panel() {
         .apply(Operation::rename("p", long), "", None)
         .unwrap();
     let width = 320.0;
-    let mut h = Harness::builder()
-        .with_size(egui::vec2(width, 400.0))
-        .build_ui_state(
-            |ui, s: &mut State<StackPanel>| {
-                let mut cx = PanelContext {
-                    doc: &s.doc,
-                    selection: &mut s.selection,
-                    commands: Vec::new(),
-                    requests: Vec::new(),
-                    gestures: &mut s.gestures,
-                    now: s.now,
-                    meshes: &s.meshes,
-                };
-                s.panel.show(ui, &mut cx);
-                s.commands.extend(cx.commands);
-            },
-            state,
-        );
+    let mut h = harness_sized(state, egui::vec2(width, 400.0), |p, ui, cx| p.show(ui, cx));
     h.run();
     let bins: Vec<egui::Rect> = h.get_all_by_label("🗑").map(|n| n.rect()).collect();
     assert_eq!(bins.len(), 2);
