@@ -300,7 +300,7 @@ impl RestMesh {
     /// [`smooth_normals`] of welded `positions` over the welded triangles: on a mesh of
     /// [`PARALLEL_COPY_THRESHOLD`] welded vertices or more and more than one thread, summed a
     /// block of vertices at a time in parallel ([`TriangleBlocks`] in blocks of
-    /// [`NORMAL_BLOCK`] vertices, made once per mesh), the same bits. On one thread the
+    /// 16,384 vertices, made once per mesh), the same bits. On one thread the
     /// serial loop is the faster (the blocks list a few triangles twice and add a pass of
     /// zeros: 16 ms against 12.5 on the suite's million-vertex head, 8.5 on two threads).
     #[must_use]
