@@ -222,7 +222,8 @@ impl Topology {
 
 /// Vertices per block of the parallel smooth normals ([`RestMesh::smooth_normals`]): on the
 /// suite's million-vertex head, blocks of 4,096 to 65,536 vertices list 8 to 4 % of the
-/// triangles twice and take 8.6 to 7.7 ms on two threads; 256 list 23 % twice and take 12.
+/// triangles twice and take 8.6 to 7.7 ms on two threads; 256 list 23 % twice and take 12
+/// (`docs/performance.md`, eighteenth session).
 const NORMAL_BLOCK: usize = 16_384;
 
 /// A validated mesh ready for deformation: the stored mesh, its welded topology and the
@@ -238,8 +239,9 @@ struct RestMeshInner {
     topology: Topology,
     welded: Vec<Vec3>,
     /// The welded triangles grouped by vertex blocks, for smooth normals in parallel; made
-    /// at the first output of a mesh of [`PARALLEL_COPY_THRESHOLD`] welded vertices or more
-    /// (`None` inside: the vertex order has no locality, and the normals are summed in order).
+    /// at the first output on more than one thread of a mesh of [`PARALLEL_COPY_THRESHOLD`]
+    /// welded vertices or more (`None` inside: the vertex order has no locality, or the mesh
+    /// is too big to list, and the normals are summed in order).
     normal_blocks: OnceLock<Option<TriangleBlocks>>,
 }
 
@@ -303,6 +305,10 @@ impl RestMesh {
     /// 16,384 vertices, made once per mesh), the same bits. On one thread the
     /// serial loop is the faster (the blocks list a few triangles twice and add a pass of
     /// zeros: 16 ms against 12.5 on the suite's million-vertex head, 8.5 on two threads).
+    /// (16,384 is `NORMAL_BLOCK`, private.)
+    ///
+    /// # Panics
+    /// When a triangle's corner is past the end of `positions`.
     #[must_use]
     pub fn smooth_normals(&self, positions: &[Vec3]) -> Vec<Vec3> {
         let topo = self.topology();

@@ -66,9 +66,9 @@ pub struct TriangleBlocks {
 
 impl TriangleBlocks {
     /// The groups of `triangles` over `vertices` vertices in blocks of `block` (at least 1);
-    /// `None` when a corner is out of range, when the indices do not fit in `u32`, or when
-    /// the groups would list more than one and a half times as many triangles as there are
-    /// (a vertex order without locality).
+    /// `None` when a corner is out of range, when one and a half times the triangle count
+    /// does not fit in `u32`, or when the groups would list more than one and a half times
+    /// as many triangles as there are (a vertex order without locality).
     #[must_use]
     pub fn new(vertices: usize, triangles: &[[u32; 3]], block: usize) -> Option<Self> {
         let block = block.max(1);
