@@ -18,7 +18,7 @@ use crate::chunks::zeroed;
 pub fn smooth_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
     let mut acc = vec![Vec3::ZERO; positions.len()];
     for &[a, b, c] in triangles {
-        let n = face_normal(positions, a, b, c);
+        let n = face_normal([a, b, c], positions);
         acc[a as usize] += n;
         acc[b as usize] += n;
         acc[c as usize] += n;
@@ -29,9 +29,11 @@ pub fn smooth_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
     acc
 }
 
-/// The un-normalised face normal `(b − a) × (c − a)` of triangle `[a, b, c]`.
+/// The un-normalised face normal `(b − a) × (c − a)` of triangle `[a, b, c]` (twice its
+/// area along its unit normal), as [`smooth_normals`] sums it.
+#[must_use]
 #[inline]
-fn face_normal(positions: &[Vec3], a: u32, b: u32, c: u32) -> Vec3 {
+pub fn face_normal([a, b, c]: [u32; 3], positions: &[Vec3]) -> Vec3 {
     let (pa, pb, pc) = (
         positions[a as usize],
         positions[b as usize],
@@ -135,7 +137,7 @@ impl TriangleBlocks {
                 let first = k * self.block;
                 let listed = &self.triangles[self.starts[k] as usize..self.starts[k + 1] as usize];
                 for &[a, b, c] in listed {
-                    let n = face_normal(positions, a, b, c);
+                    let n = face_normal([a, b, c], positions);
                     let local = [a, b, c].map(|v| (v as usize).wrapping_sub(first));
                     if local.iter().all(|&j| j < acc.len()) {
                         // The usual triangle, all in this block: the serial loop's adds.

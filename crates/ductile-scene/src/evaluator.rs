@@ -53,6 +53,7 @@ use glam::Vec3;
 use ductile_core::chunks::{CHUNK, PARALLEL_THRESHOLD, Reuse, map_chunks_at, scatter_at};
 use ductile_core::influence::Mask;
 use ductile_core::mesh::{Deformed, RestMesh, Topology};
+use ductile_core::normals::face_normal;
 use ductile_core::stack::{Layer, LayerBinding, Recorded, Stack};
 use ductile_core::tool::{Tool, ToolBind};
 use rayon::prelude::*;
@@ -681,17 +682,6 @@ fn write_stored(out: &mut Deformed, weld: &[u32], positions: &[Vec3], normals: &
             *p = positions[w as usize];
             *n = normals[w as usize];
         });
-}
-
-/// The face normal `(b − a) × (c − a)` of a triangle, as `smooth_normals` computes it.
-#[inline]
-fn face_normal([a, b, c]: [u32; 3], positions: &[Vec3]) -> Vec3 {
-    let (pa, pb, pc) = (
-        positions[a as usize],
-        positions[b as usize],
-        positions[c as usize],
-    );
-    (pb - pa).cross(pc - pa)
 }
 
 /// Caches the evaluation of one mesh node's stack and brings it up to date with a
