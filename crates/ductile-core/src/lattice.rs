@@ -25,6 +25,7 @@ use glam::{Affine3A, Vec3, Vec4};
 use serde::{Deserialize, Serialize};
 
 mod simd;
+mod sparse;
 
 use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all};
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
@@ -297,6 +298,8 @@ pub struct PreparedLattice {
     weights: Vec<f32>,
     rational: bool,
     falloff: f32,
+    /// The sum over the few moved control points, where it applies (`lattice/sparse.rs`).
+    sparse: Option<sparse::Sparse>,
 }
 
 impl PreparedLattice {
@@ -337,6 +340,7 @@ impl PreparedLattice {
             weights,
             rational: false,
             falloff: tool.falloff,
+            sparse: None,
         };
         me.rebuild();
         Ok(me)
@@ -359,6 +363,8 @@ impl PreparedLattice {
                 }
             })
             .collect();
+        self.sparse = None;
+        self.sparse = sparse::Sparse::new(self);
     }
 
     /// Forces the rational evaluation path even when every weight is 1 (for tests).
@@ -366,6 +372,7 @@ impl PreparedLattice {
     fn force_rational(&mut self) {
         self.rebuild();
         self.rational = true;
+        self.sparse = None;
         let [l, m, _] = self.counts;
         self.data = (0..self.offsets.len())
             .map(|idx| {
@@ -540,6 +547,9 @@ impl PreparedLattice {
     /// The same bits as [`PreparedLattice::deform_slice`] gives the point.
     #[must_use]
     pub fn deform_point(&self, x: Vec3) -> Vec3 {
+        if self.sparse.is_some() {
+            return self.deform_with(x, Self::sparse_tensor);
+        }
         if self.has_block_kernel() {
             let mut out = [x];
             self.deform_slice(&[x], &[0], &mut out);
@@ -594,11 +604,14 @@ impl PreparedLattice {
         true
     }
 
-    /// Deforms `active` vertices of `positions` into `out`. Lattices with the same number of
-    /// basis functions (2 to 8) on every axis go through the block kernels (a point per SIMD
-    /// lane, the `simd` module); others point by point.
+    /// Deforms `active` vertices of `positions` into `out`. A non-rational lattice with a few
+    /// moved control points is summed over those alone (the `sparse` module); other
+    /// lattices with the same number of basis functions (2 to 8) on every axis go through
+    /// the block kernels (a point per SIMD lane, the `simd` module); the rest point by point.
     pub fn deform_slice(&self, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
-        if self.deform_slice_blocks(positions, active, out) {
+        if self.deform_slice_sparse(positions, active, out)
+            || self.deform_slice_blocks(positions, active, out)
+        {
             return;
         }
         match self.uniform_len() {

@@ -34,7 +34,7 @@ use pulp::{Simd, WithSimd};
 use super::{AxisBasis, PreparedLattice};
 
 /// The most lanes a block holds (AVX-512 has 16 `f32` lanes).
-const MAX_LANES: usize = 16;
+pub(super) const MAX_LANES: usize = 16;
 
 /// Components of the dense control data: `(ΔP, 0)` or `(W(P − U₀), W)`.
 const COMPONENTS: usize = 4;
@@ -167,22 +167,26 @@ fn binomials<const L: usize>() -> [f32; L] {
 
 /// A block of up to [`MAX_LANES`] points: their coordinates by axis, as registers and as
 /// arrays, and their lattice coordinates.
-struct Block<S: Simd> {
-    n: usize,
+pub(super) struct Block<S: Simd> {
+    /// The number of points.
+    pub(super) n: usize,
     p: [[f32; MAX_LANES]; 3],
-    x: [S::f32s; 3],
-    u: [S::f32s; 3],
+    /// The points by axis.
+    pub(super) x: [S::f32s; 3],
+    /// Their lattice coordinates by axis.
+    pub(super) u: [S::f32s; 3],
     uc: [[f32; MAX_LANES]; 3],
 }
 
 /// The frame as registers: origin and the inverse rows.
-struct Frame<S: Simd> {
+pub(super) struct Frame<S: Simd> {
     origin: [S::f32s; 3],
     rows: [[S::f32s; 3]; 3],
 }
 
+/// The frame of `lat` as registers.
 #[inline(always)]
-fn frame<S: Simd>(simd: S, lat: &PreparedLattice) -> Frame<S> {
+pub(super) fn frame<S: Simd>(simd: S, lat: &PreparedLattice) -> Frame<S> {
     let zero = simd.splat_f32s(0.0);
     let o = lat.frame.origin;
     let mut rows = [[zero; 3]; 3];
@@ -204,7 +208,7 @@ fn frame<S: Simd>(simd: S, lat: &PreparedLattice) -> Frame<S> {
 /// Loads the points `idx` of `positions` and computes their lattice coordinates
 /// `u_a = (r_a.x·dx + r_a.y·dy) + r_a.z·dz`, unfused: glam's `dot`, bit for bit.
 #[inline(always)]
-fn load<S: Simd>(simd: S, f: &Frame<S>, positions: &[Vec3], idx: &[u32]) -> Block<S> {
+pub(super) fn load<S: Simd>(simd: S, f: &Frame<S>, positions: &[Vec3], idx: &[u32]) -> Block<S> {
     let zero = simd.splat_f32s(0.0);
     let n = idx.len();
     let mut p = [[0.0_f32; MAX_LANES]; 3];
@@ -236,7 +240,7 @@ fn load<S: Simd>(simd: S, f: &Frame<S>, positions: &[Vec3], idx: &[u32]) -> Bloc
 impl<S: Simd> Block<S> {
     /// Lane `l`'s point and lattice coordinates.
     #[inline(always)]
-    fn lane(&self, l: usize) -> (Vec3, Vec3) {
+    pub(super) fn lane(&self, l: usize) -> (Vec3, Vec3) {
         (
             Vec3::new(self.p[0][l], self.p[1][l], self.p[2][l]),
             Vec3::new(self.uc[0][l], self.uc[1][l], self.uc[2][l]),
