@@ -100,7 +100,7 @@ impl Function {
     /// The function's values at `t`, one per lane (module documentation).
     #[inline(always)]
     fn value<S: Simd>(&self, simd: S, t: S::f32s) -> S::f32s {
-        let (zero, one) = (simd.splat_f32s(0.0), simd.splat_f32s(1.0));
+        let one = simd.splat_f32s(1.0);
         match self {
             &Self::Bernstein { n, i, binomial } => {
                 let s = simd.sub_f32s(one, t);
@@ -114,44 +114,62 @@ impl Function {
                 }
                 simd.mul_f32s(simd.mul_f32s(simd.splat_f32s(binomial), tp), sp)
             }
-            Self::BSpline { p, spans, steps } => {
-                let mut n = [zero; MAX_DEGREE + 1];
-                for (v, &(lo, hi, closed)) in n.iter_mut().zip(spans) {
-                    let (lo, hi) = (simd.splat_f32s(lo), simd.splat_f32s(hi));
-                    let below = if closed {
-                        simd.less_than_or_equal_f32s(t, hi)
-                    } else {
-                        simd.less_than_f32s(t, hi)
-                    };
-                    let inside = simd.and_m32s(simd.greater_than_or_equal_f32s(t, lo), below);
-                    *v = simd.select_f32s(inside, one, zero);
-                }
-                let mut s = 0;
-                for k in 1..=*p {
-                    for j in 0..=*p - k {
-                        let [a, ra, b, rb] = steps[s];
-                        s += 1;
-                        let left = simd.mul_f32s(
-                            simd.mul_f32s(
-                                simd.sub_f32s(t, simd.splat_f32s(a)),
-                                simd.splat_f32s(ra),
-                            ),
-                            n[j],
-                        );
-                        let right = simd.mul_f32s(
-                            simd.mul_f32s(
-                                simd.sub_f32s(simd.splat_f32s(b), t),
-                                simd.splat_f32s(rb),
-                            ),
-                            n[j + 1],
-                        );
-                        n[j] = simd.add_f32s(left, right);
-                    }
-                }
-                n[0]
-            }
+            Self::BSpline { p, spans, steps } => match p {
+                1 => bspline_value::<S, 2>(simd, spans, steps, t),
+                2 => bspline_value::<S, 3>(simd, spans, steps, t),
+                3 => bspline_value::<S, 4>(simd, spans, steps, t),
+                _ => bspline_value::<S, { MAX_DEGREE + 1 }>(simd, &spans[..], steps, t),
+            },
         }
     }
+}
+
+/// `N_{i,p}(t)` in each lane by the triangular table (module documentation), for a table
+/// of `spans.len() = p + 1 ≤ L` entries: `L = p + 1` for the common degrees (the loops
+/// unroll and the table stays in registers), `L = MAX_DEGREE + 1` for any other. The same
+/// operations in the same order for every `L`.
+#[inline(always)]
+fn bspline_value<S: Simd, const L: usize>(
+    simd: S,
+    spans: &[(f32, f32, bool)],
+    steps: &[[f32; 4]],
+    t: S::f32s,
+) -> S::f32s {
+    let (zero, one) = (simd.splat_f32s(0.0), simd.splat_f32s(1.0));
+    // A compile-time `p` for the common degrees, so that the loops unroll.
+    let p = if L <= MAX_DEGREE {
+        L - 1
+    } else {
+        spans.len() - 1
+    };
+    let mut n = [zero; L];
+    for (v, &(lo, hi, closed)) in n.iter_mut().zip(spans) {
+        let (lo, hi) = (simd.splat_f32s(lo), simd.splat_f32s(hi));
+        let below = if closed {
+            simd.less_than_or_equal_f32s(t, hi)
+        } else {
+            simd.less_than_f32s(t, hi)
+        };
+        let inside = simd.and_m32s(simd.greater_than_or_equal_f32s(t, lo), below);
+        *v = simd.select_f32s(inside, one, zero);
+    }
+    let mut s = 0;
+    for k in 1..=p {
+        for j in 0..=p - k {
+            let [a, ra, b, rb] = steps[s];
+            s += 1;
+            let left = simd.mul_f32s(
+                simd.mul_f32s(simd.sub_f32s(t, simd.splat_f32s(a)), simd.splat_f32s(ra)),
+                n[j],
+            );
+            let right = simd.mul_f32s(
+                simd.mul_f32s(simd.sub_f32s(simd.splat_f32s(b), t), simd.splat_f32s(rb)),
+                n[j + 1],
+            );
+            n[j] = simd.add_f32s(left, right);
+        }
+    }
+    n[0]
 }
 
 /// The moved control points of a non-rational lattice and the basis functions they read
