@@ -176,13 +176,7 @@ impl LayerBinding {
             work(0, indices, &mut saved, &mut written)
         };
         if let Some(k) = bad {
-            return Err(CoreError::Degenerate {
-                what: format!("layer '{}'", layer.name),
-                problem: format!(
-                    "the tool produced a non-finite position for vertex {}",
-                    indices[k]
-                ),
-            });
+            return Err(non_finite(layer, indices[k]));
         }
         scatter_at(positions, indices, &written);
         Ok(Recorded {
@@ -264,13 +258,7 @@ impl LayerBinding {
         let active: Vec<u32> = at.iter().map(|&k| self.mask.indices[k as usize]).collect();
         let mut out = zeroed(active.len());
         if let Some(k) = deform_chunks(&layer.tool, bind, positions, &active, &mut out) {
-            return Err(CoreError::Degenerate {
-                what: format!("layer '{}'", layer.name),
-                problem: format!(
-                    "the tool produced a non-finite position for vertex {}",
-                    active[k]
-                ),
-            });
+            return Err(non_finite(layer, active[k]));
         }
         for ((&k, &i), &d) in at.iter().zip(&active).zip(&out) {
             let w = self.mask.weights[k as usize] * layer.weight;
@@ -317,13 +305,7 @@ impl LayerBinding {
             });
         }
         if let Some(k) = bad {
-            return Err(CoreError::Degenerate {
-                what: format!("layer '{}'", layer.name),
-                problem: format!(
-                    "the tool produced a non-finite position for vertex {}",
-                    active[k]
-                ),
-            });
+            return Err(non_finite(layer, active[k]));
         }
         Ok(result)
     }
@@ -335,6 +317,14 @@ impl LayerBinding {
         for_each_at(positions, &self.mask.indices, |k, p| {
             *p = blend_one(*p, out[k], weights[k] * layer.weight);
         });
+    }
+}
+
+/// The error of a layer whose tool produced a non-finite position for `vertex`.
+fn non_finite(layer: &Layer, vertex: u32) -> CoreError {
+    CoreError::Degenerate {
+        what: format!("layer '{}'", layer.name),
+        problem: format!("the tool produced a non-finite position for vertex {vertex}"),
     }
 }
 
