@@ -363,7 +363,6 @@ impl PreparedLattice {
                 }
             })
             .collect();
-        self.sparse = None;
         self.sparse = sparse::Sparse::new(self);
     }
 

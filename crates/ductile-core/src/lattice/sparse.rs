@@ -20,7 +20,8 @@
 //!   difference is 0: that function is zero everywhere, the textbook's `0/0 = 0`).
 //!
 //! A point outside a moved point's support gets an exact zero from it, so a B-spline point
-//! no moved control point reaches keeps its input bits. Every lane of the kernel performs
+//! no moved control point reaches keeps its input (bit for bit, but for a `−0` coordinate,
+//! which `−0 + 0` makes `+0`, as the dense kernels do). Every lane of the kernel performs
 //! the operations of the one-lane form (`pulp::Scalar`, the same generic code) in the same
 //! order, with products and sums kept apart (no fused multiply–add), so a point has the
 //! same bits in any block, on any CPU, and through [`PreparedLattice::deform_point`].
@@ -59,8 +60,8 @@ impl Function {
     fn new(axis: &AxisBasis, i: usize) -> Self {
         match axis {
             AxisBasis::Bernstein(n) => {
-                // C(n, i) as the dense kernels' binomials, in f64 then rounded (exact for
-                // the degrees a lattice takes).
+                // C(n, i) in f64, then rounded: exact for the degrees a lattice takes, as
+                // the dense kernels' f32 products are.
                 let mut c = 1.0_f64;
                 for r in 0..i {
                     c = c * (n - r) as f64 / (r + 1) as f64;
@@ -142,6 +143,11 @@ fn bspline_value<S: Simd, const L: usize>(
     } else {
         spans.len() - 1
     };
+    debug_assert_eq!(
+        spans.len(),
+        p + 1,
+        "one degree-0 span per function of the table"
+    );
     let mut n = [zero; L];
     for (v, &(lo, hi, closed)) in n.iter_mut().zip(spans) {
         let (lo, hi) = (simd.splat_f32s(lo), simd.splat_f32s(hi));
@@ -330,7 +336,8 @@ mod tests {
         }
     }
 
-    /// `t` moved control points of `tool` (corners, the middle, the last layer), with a falloff.
+    /// `points` moved control points of `tool` (corners, the middle, the last layer; fewer
+    /// where two of them fall on one control point), with a falloff.
     fn moved(mut tool: LatticeTool, points: usize) -> PreparedLattice {
         tool.falloff = 0.3;
         let (a, b, c) = tool.counts;
@@ -351,35 +358,39 @@ mod tests {
         tool.prepare("test").unwrap()
     }
 
-    /// Bernstein 2³…6³ and B-spline lattices of degree 1…3, 1 to 8 moved points where the
-    /// sparse form takes them.
+    /// Bernstein 2³…6³ and 2×4×3, B-spline lattices of degree 1…3, 5 and 15 (the table's
+    /// general size) and of degrees (1, 2, 3), 1 to 8 moved points where the sparse form takes
+    /// them.
     fn lattices() -> Vec<(String, PreparedLattice)> {
         let mut tools = Vec::new();
         for n in 2..=6 {
             tools.push(LatticeTool::bernstein(frame(), (n, n, n)));
         }
+        tools.push(LatticeTool::bernstein(frame(), (2, 4, 3)));
         for (counts, degree) in [
-            ((4, 4, 4), 2),
-            ((5, 3, 6), 2),
-            ((7, 6, 5), 3),
-            ((3, 4, 2), 1),
-            ((8, 8, 8), 2),
+            ((4, 4, 4), (2, 2, 2)),
+            ((5, 3, 6), (2, 2, 2)),
+            ((7, 6, 5), (3, 3, 3)),
+            ((3, 4, 2), (1, 1, 1)),
+            ((8, 8, 8), (2, 2, 2)),
+            ((7, 7, 7), (5, 5, 5)),
+            ((16, 16, 16), (15, 15, 15)),
+            ((5, 4, 6), (1, 2, 3)),
         ] {
-            tools.push(LatticeTool::bspline(
-                frame(),
-                counts,
-                (degree, degree, degree),
-            ));
+            tools.push(LatticeTool::bspline(frame(), counts, degree));
         }
         let mut out = Vec::new();
         for tool in tools {
             for points in 1..=MOST_MOVED {
                 let lat = moved(tool.clone(), points);
-                if lat.sparse.is_some() {
-                    out.push((
-                        format!("{:?} {:?}, {points} moved", tool.basis, tool.counts),
-                        lat,
-                    ));
+                if let Some(sparse) = &lat.sparse {
+                    let name = format!(
+                        "{:?} {:?}, {} moved",
+                        tool.basis,
+                        tool.counts,
+                        sparse.moved.len()
+                    );
+                    out.push((name, lat));
                 }
             }
         }
@@ -525,14 +536,34 @@ mod tests {
         // N₀ of a clamped quadratic with 6 points is non-zero on [0, 1/4).
         let far = tool.frame.point(Vec3::new(0.6, 0.1, 0.1));
         let near = tool.frame.point(Vec3::new(0.1, 0.1, 0.1));
-        let edge = tool.frame.point(Vec3::new(0.25, 0.1, 0.1));
         let got = |x: Vec3| {
             let mut out = [Vec3::ZERO];
             lat.deform_slice(&[x], &[0], &mut out);
             out[0]
         };
         assert_eq!(got(far).to_array(), far.to_array());
-        assert_eq!(got(edge).to_array(), edge.to_array());
         assert_ne!(got(near), near);
+    }
+
+    /// Direct FFD moves a lattice further with `add_offsets`: past the limit it leaves the
+    /// sparse form, and then gives what the dense kernels give.
+    #[test]
+    fn a_lattice_moved_further_leaves_the_sparse_form() {
+        let mut lat = moved(LatticeTool::bspline(frame(), (6, 6, 6), (2, 2, 2)), 1);
+        assert!(lat.sparse.is_some());
+        let mut delta = vec![Vec3::ZERO; lat.len()];
+        for (k, d) in delta.iter_mut().enumerate().step_by(7) {
+            *d = Vec3::new(0.01, -0.02, 0.005 * (k % 5) as f32);
+        }
+        lat.add_offsets(&delta);
+        assert!(lat.sparse.is_none());
+        let pts = points(&lat);
+        let active: Vec<u32> = (0..pts.len() as u32).collect();
+        let mut out = vec![Vec3::ZERO; pts.len()];
+        lat.deform_slice(&pts, &active, &mut out);
+        let mut blocks = vec![Vec3::ZERO; pts.len()];
+        assert!(lat.deform_slice_blocks(&pts, &active, &mut blocks));
+        let bits = |v: &[Vec3]| v.iter().map(|p| p.to_array()).collect::<Vec<_>>();
+        assert_eq!(bits(&out), bits(&blocks));
     }
 }
