@@ -18,6 +18,16 @@ pub struct StackPanel {
 #[derive(Debug, Clone, PartialEq)]
 struct DraggedLayer(String, usize);
 
+/// What a layer's row shows: its mesh, its index and spec, and the stack's length (which the
+/// move buttons check).
+#[derive(Clone, Copy)]
+struct Row<'a> {
+    mesh: &'a str,
+    i: usize,
+    layer: &'a LayerSpec,
+    count: usize,
+}
+
 /// A short description of a layer's influence.
 fn influence_summary(inf: Option<&InfluenceSpec>) -> String {
     let Some(inf) = inf else {
@@ -68,7 +78,13 @@ impl StackPanel {
                     let frame = egui::Frame::default().inner_margin(1.0);
                     let (_, dropped) = ui.dnd_drop_zone::<DraggedLayer, ()>(frame, |ui| {
                         ui.horizontal(|ui| {
-                            self.row(ui, cx, &mesh_name, i, layer, count);
+                            let row = Row {
+                                mesh: &mesh_name,
+                                i,
+                                layer,
+                                count,
+                            };
+                            Self::row(ui, cx, row);
                         });
                     });
                     if let Some(d) = dropped
@@ -90,15 +106,14 @@ impl StackPanel {
         self.add_layer_row(ui, cx, &mesh_name, count);
     }
 
-    fn row(
-        &mut self,
-        ui: &mut egui::Ui,
-        cx: &mut PanelContext<'_>,
-        mesh_name: &str,
-        i: usize,
-        layer: &LayerSpec,
-        count: usize,
-    ) {
+    /// One layer's row: drag handle, enabled, solo, name and controls.
+    fn row(ui: &mut egui::Ui, cx: &mut PanelContext<'_>, row: Row<'_>) {
+        let Row {
+            mesh: mesh_name,
+            i,
+            layer,
+            ..
+        } = row;
         let doc = cx.doc.shown();
         ui.dnd_drag_source(
             egui::Id::new(("layer-drag", mesh_name, i)),
@@ -129,22 +144,21 @@ impl StackPanel {
         // The controls sit at the row's right end, in the same place on every row; the
         // name takes the space between them and the solo button.
         ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
-            Self::controls(ui, cx, mesh_name, i, layer, count);
+            Self::controls(ui, cx, row);
             ui.with_layout(egui::Layout::left_to_right(egui::Align::Center), |ui| {
-                Self::name(ui, cx, mesh_name, i, layer);
+                Self::name(ui, cx, row);
             });
         });
     }
 
     /// A row's weight, duplicate, move and remove controls, added right to left.
-    fn controls(
-        ui: &mut egui::Ui,
-        cx: &mut PanelContext<'_>,
-        mesh_name: &str,
-        i: usize,
-        layer: &LayerSpec,
-        count: usize,
-    ) {
+    fn controls(ui: &mut egui::Ui, cx: &mut PanelContext<'_>, row: Row<'_>) {
+        let Row {
+            mesh: mesh_name,
+            i,
+            layer,
+            count,
+        } = row;
         let doc = cx.doc.shown();
         if ui
             .small_button("🗑")
@@ -197,13 +211,13 @@ impl StackPanel {
     }
 
     /// A row's layer name, selecting the layer and its tool when clicked.
-    fn name(
-        ui: &mut egui::Ui,
-        cx: &mut PanelContext<'_>,
-        mesh_name: &str,
-        i: usize,
-        layer: &LayerSpec,
-    ) {
+    fn name(ui: &mut egui::Ui, cx: &mut PanelContext<'_>, row: Row<'_>) {
+        let Row {
+            mesh: mesh_name,
+            i,
+            layer,
+            ..
+        } = row;
         let selected = cx.selection.layer == Some((mesh_name.to_owned(), i));
         // The name fills what the controls leave, cut short with "…" when it does
         // not fit (the full name and the influence on hover).
