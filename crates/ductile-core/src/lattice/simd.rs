@@ -441,12 +441,13 @@ impl<const L: usize, const C: usize> WithSimd for BSpline<'_, L, C> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use glam::Vec3;
 
     use crate::lattice::{LatticeFrame, LatticeTool, PreparedLattice};
 
-    fn frame() -> LatticeFrame {
+    /// A skewed frame for the lattices of the tests.
+    pub(in crate::lattice) fn frame() -> LatticeFrame {
         LatticeFrame {
             origin: Vec3::new(-1.0, -0.5, 0.2),
             s: Vec3::new(2.0, 0.3, 0.0),
@@ -505,7 +506,7 @@ mod tests {
     }
 
     /// Points inside, on the boundary and outside (within and beyond the falloff).
-    fn points(lat: &PreparedLattice) -> Vec<Vec3> {
+    pub(in crate::lattice) fn points(lat: &PreparedLattice) -> Vec<Vec3> {
         let mut pts = Vec::new();
         for a in 0..9 {
             for b in 0..7 {
@@ -536,25 +537,30 @@ mod tests {
         }
     }
 
+    /// Every third of `lat`'s test points, deformed in shifted blocks and each alone, has
+    /// the bits it gets among all the points.
+    pub(in crate::lattice) fn check_the_same_bits_in_any_block(name: &str, lat: &PreparedLattice) {
+        let pts = points(lat);
+        let active: Vec<u32> = (0..pts.len() as u32).collect();
+        let mut all = vec![Vec3::ZERO; pts.len()];
+        lat.deform_slice(&pts, &active, &mut all);
+        let some: Vec<u32> = (1..pts.len() as u32).step_by(3).collect();
+        let mut part = vec![Vec3::ZERO; some.len()];
+        lat.deform_slice(&pts, &some, &mut part);
+        for (&i, q) in some.iter().zip(&part) {
+            assert_eq!(q.to_array(), all[i as usize].to_array(), "{name}");
+            assert_eq!(
+                lat.deform_point(pts[i as usize]).to_array(),
+                q.to_array(),
+                "{name}"
+            );
+        }
+    }
+
     #[test]
     fn a_point_gets_the_same_bits_in_any_block() {
         for (name, lat) in lattices() {
-            let pts = points(&lat);
-            let active: Vec<u32> = (0..pts.len() as u32).collect();
-            let mut all = vec![Vec3::ZERO; pts.len()];
-            lat.deform_slice(&pts, &active, &mut all);
-            // Every third point, in shifted blocks, and each point alone.
-            let some: Vec<u32> = (1..pts.len() as u32).step_by(3).collect();
-            let mut part = vec![Vec3::ZERO; some.len()];
-            lat.deform_slice(&pts, &some, &mut part);
-            for (&i, q) in some.iter().zip(&part) {
-                assert_eq!(q.to_array(), all[i as usize].to_array(), "{name}");
-                assert_eq!(
-                    lat.deform_point(pts[i as usize]).to_array(),
-                    q.to_array(),
-                    "{name}"
-                );
-            }
+            check_the_same_bits_in_any_block(&name, &lat);
         }
     }
 }

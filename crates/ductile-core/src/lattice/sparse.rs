@@ -325,16 +325,8 @@ mod tests {
 
     use super::{Function, MOST_MOVED};
     use crate::basis::KnotVector;
-    use crate::lattice::{AxisBasis, LatticeFrame, LatticeTool, PreparedLattice};
-
-    fn frame() -> LatticeFrame {
-        LatticeFrame {
-            origin: Vec3::new(-1.0, -0.5, 0.2),
-            s: Vec3::new(2.0, 0.3, 0.0),
-            t: Vec3::new(-0.2, 1.5, 0.1),
-            u: Vec3::new(0.1, 0.0, 1.2),
-        }
-    }
+    use crate::lattice::simd::tests::{check_the_same_bits_in_any_block, frame, points};
+    use crate::lattice::{AxisBasis, LatticeTool, PreparedLattice};
 
     /// `points` moved control points of `tool` (corners, the middle, the last layer; fewer
     /// where two of them fall on one control point), with a falloff.
@@ -395,20 +387,6 @@ mod tests {
             }
         }
         out
-    }
-
-    /// Points inside, on the boundary and outside (within and beyond the falloff).
-    fn points(lat: &PreparedLattice) -> Vec<Vec3> {
-        let mut pts = Vec::new();
-        for a in 0..9 {
-            for b in 0..7 {
-                for c in 0..5 {
-                    let u = Vec3::new(a as f32 / 8.0, b as f32 / 6.0, c as f32 / 4.0);
-                    pts.push(lat.frame.point(u * 1.2 - Vec3::splat(0.1)));
-                }
-            }
-        }
-        pts
     }
 
     #[test]
@@ -507,21 +485,7 @@ mod tests {
     #[test]
     fn a_point_gets_the_same_bits_in_any_block_and_alone() {
         for (name, lat) in lattices() {
-            let pts = points(&lat);
-            let active: Vec<u32> = (0..pts.len() as u32).collect();
-            let mut all = vec![Vec3::ZERO; pts.len()];
-            lat.deform_slice(&pts, &active, &mut all);
-            let some: Vec<u32> = (1..pts.len() as u32).step_by(3).collect();
-            let mut part = vec![Vec3::ZERO; some.len()];
-            lat.deform_slice(&pts, &some, &mut part);
-            for (&i, q) in some.iter().zip(&part) {
-                assert_eq!(q.to_array(), all[i as usize].to_array(), "{name}");
-                assert_eq!(
-                    lat.deform_point(pts[i as usize]).to_array(),
-                    q.to_array(),
-                    "{name}"
-                );
-            }
+            check_the_same_bits_in_any_block(&name, &lat);
         }
     }
 
