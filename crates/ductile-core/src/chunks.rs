@@ -48,6 +48,13 @@ pub fn zeroed<T: bytemuck::Zeroable + Copy + Send + Sync>(n: usize) -> Vec<T> {
     v
 }
 
+/// Whether `indices` is strictly ascending (sorted, each once), as an influence mask's
+/// indices are.
+#[must_use]
+pub fn strictly_ascending(indices: &[u32]) -> bool {
+    indices.windows(2).all(|w| w[0] < w[1])
+}
+
 /// The slots of a compact per-vertex bind of `n` vertices: `slot[v]` is the position of
 /// vertex `v` in the bind's active list (`u32::MAX` for a vertex that is not active), with
 /// that list (the vertices of `active` below `n`, each once, in order).
@@ -65,7 +72,7 @@ pub fn bind_slots(n: usize, active: &[u32]) -> (Vec<u32>, Vec<u32>) {
     }
     // A mask's indices (strictly ascending, in range) are the list itself; their slots are
     // written in parallel chunks.
-    if active.windows(2).all(|w| w[0] < w[1]) && active.last().is_none_or(|&i| (i as usize) < n) {
+    if strictly_ascending(active) && active.last().is_none_or(|&i| (i as usize) < n) {
         for_each_at(&mut slot, active, |k, s| *s = k as u32);
         return (slot, active.to_vec());
     }
@@ -203,8 +210,8 @@ pub fn map_chunks_at<T: Send, R: Send>(
     indices: &[u32],
     f: impl Fn(usize, &[u32], &mut ChunkValues<'_, T>) -> R + Sync + Send,
 ) -> Vec<R> {
-    let ascending = indices.windows(2).all(|w| w[0] < w[1])
-        && indices.last().is_none_or(|&i| (i as usize) < values.len());
+    let ascending =
+        strictly_ascending(indices) && indices.last().is_none_or(|&i| (i as usize) < values.len());
     if !ascending || indices.len() <= CHUNK {
         return vec![f(
             0,

@@ -10,11 +10,13 @@
 //! Only vertices with `w(v) > 0` are handed to the tool at all (the FFSD paper's "area of
 //! influence" speed-up); all others keep their input position bit for bit.
 
+use std::borrow::Cow;
+
 use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::chunks::{CHUNK, PARALLEL_THRESHOLD, zeroed};
+use crate::chunks::{CHUNK, PARALLEL_THRESHOLD, strictly_ascending, zeroed};
 use crate::error::{CoreError, Result, check_finite};
 use crate::spline::SplineControl;
 use crate::volume_lanes::{Ids, LaneInfluence};
@@ -651,17 +653,17 @@ impl Influence {
         // A mask's indices ascend (`ChunkBounds::mark` and the reuse of an earlier mask read
         // them so): an area given out of order or with repeats (a resolved area never is)
         // is sorted and made unique first.
-        let sorted: Vec<u32>;
-        let area = match area {
-            Some(a) if !a.windows(2).all(|w| w[0] < w[1]) => {
+        let area: Option<Cow<'_, [u32]>> = area.map(|a| {
+            if strictly_ascending(a) {
+                Cow::Borrowed(a)
+            } else {
                 let mut copy = a.to_vec();
                 copy.sort_unstable();
                 copy.dedup();
-                sorted = copy;
-                Some(&sorted[..])
+                Cow::Owned(copy)
             }
-            other => other,
-        };
+        });
+        let area = area.as_deref();
         if self.volumes.is_empty() {
             // `g(v) = 1` everywhere: the mask is the area (or every vertex), weight 1.
             let indices: Vec<u32> = match area {

@@ -305,7 +305,6 @@ impl RestMesh {
     /// 16,384 vertices, made once per mesh), the same bits. On one thread the
     /// serial loop is the faster (the blocks list a few triangles twice and add a pass of
     /// zeros: 16 ms against 12.5 on the suite's million-vertex head, 8.5 on two threads).
-    /// (16,384 is `NORMAL_BLOCK`, private.)
     ///
     /// # Panics
     /// When a triangle's corner is past the end of `positions`.

@@ -45,11 +45,10 @@ const MOST_MOVED: usize = 8;
 enum Function {
     /// `Bᵢⁿ(t)`: the degree `n`, the index `i` and `C(n, i)`.
     Bernstein { n: usize, i: usize, binomial: f32 },
-    /// `N_{i,p}(t)`: the degree `p`; per degree-0 span `j = 0..=p` its knots and whether it
-    /// is closed on the right; per step of the table (`k = 1..=p`, `j = 0..=p−k`, in that
+    /// `N_{i,p}(t)`: per degree-0 span `j = 0..=p` its knots and whether it is closed on the
+    /// right (so `p + 1` spans); per step of the table (`k = 1..=p`, `j = 0..=p−k`, in that
     /// order) `(u_{i+j}, r, u_{i+j+k+1}, r')`.
     BSpline {
-        p: usize,
         spans: Vec<(f32, f32, bool)>,
         steps: Vec<[f32; 4]>,
     },
@@ -93,7 +92,7 @@ impl Function {
                         ]);
                     }
                 }
-                Self::BSpline { p, spans, steps }
+                Self::BSpline { spans, steps }
             }
         }
     }
@@ -115,11 +114,11 @@ impl Function {
                 }
                 simd.mul_f32s(simd.mul_f32s(simd.splat_f32s(binomial), tp), sp)
             }
-            Self::BSpline { p, spans, steps } => match p {
-                1 => bspline_value::<S, 2>(simd, spans, steps, t),
-                2 => bspline_value::<S, 3>(simd, spans, steps, t),
-                3 => bspline_value::<S, 4>(simd, spans, steps, t),
-                _ => bspline_value::<S, { MAX_DEGREE + 1 }>(simd, &spans[..], steps, t),
+            Self::BSpline { spans, steps } => match spans.len() {
+                2 => bspline_value::<S, 2>(simd, spans, steps, t),
+                3 => bspline_value::<S, 3>(simd, spans, steps, t),
+                4 => bspline_value::<S, 4>(simd, spans, steps, t),
+                _ => bspline_value::<S, { MAX_DEGREE + 1 }>(simd, spans, steps, t),
             },
         }
     }
@@ -182,8 +181,8 @@ fn bspline_value<S: Simd, const L: usize>(
 /// (module documentation).
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct Sparse {
-    /// Per axis, the distinct functions the moved points read.
-    functions: [Vec<Function>; 3],
+    /// Per axis, the distinct functions the moved points read, with their indices.
+    functions: [Vec<(usize, Function)>; 3],
     /// Per moved point, in the order of the dense data: its function on each axis (an index
     /// into `functions`) and its offset `ΔP`.
     moved: Vec<([usize; 3], Vec3)>,
@@ -198,8 +197,7 @@ impl Sparse {
         }
         let [l, m, _] = lattice.counts;
         let total = lattice.offsets.len();
-        let mut functions: [Vec<Function>; 3] = Default::default();
-        let mut used: [Vec<usize>; 3] = Default::default();
+        let mut functions: [Vec<(usize, Function)>; 3] = Default::default();
         let mut moved = Vec::new();
         for (idx, &d) in lattice.offsets.iter().enumerate() {
             if d == Vec3::ZERO {
@@ -211,14 +209,11 @@ impl Sparse {
             let at = [idx % l, (idx / l) % m, idx / (l * m)];
             let mut slots = [0; 3];
             for a in 0..3 {
-                slots[a] = match used[a].iter().position(|&i| i == at[a]) {
-                    Some(s) => s,
-                    None => {
-                        used[a].push(at[a]);
-                        functions[a].push(Function::new(&lattice.axes[a], at[a]));
-                        used[a].len() - 1
-                    }
-                };
+                let fs = &mut functions[a];
+                slots[a] = fs.iter().position(|(i, _)| *i == at[a]).unwrap_or_else(|| {
+                    fs.push((at[a], Function::new(&lattice.axes[a], at[a])));
+                    fs.len() - 1
+                });
             }
             moved.push((slots, d));
         }
@@ -231,7 +226,7 @@ impl Sparse {
         let zero = simd.splat_f32s(0.0);
         let mut values = [[zero; MOST_MOVED]; 3];
         for a in 0..3 {
-            for (v, f) in values[a].iter_mut().zip(&self.functions[a]) {
+            for (v, (_, f)) in values[a].iter_mut().zip(&self.functions[a]) {
                 *v = f.value(simd, u[a]);
             }
         }
