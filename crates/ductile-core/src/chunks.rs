@@ -6,6 +6,8 @@
 //! Every helper gives each element the same single computation whether it runs in parallel
 //! or in order, so results are the same bits on any number of threads.
 
+use std::borrow::Cow;
+
 use rayon::prelude::*;
 
 /// Above this many active vertices a layer deforms (and blends, masks, binds) in parallel
@@ -57,9 +59,10 @@ pub fn strictly_ascending(indices: &[u32]) -> bool {
 
 /// The slots of a compact per-vertex bind of `n` vertices: `slot[v]` is the position of
 /// vertex `v` in the bind's active list (`u32::MAX` for a vertex that is not active), with
-/// that list (the vertices of `active` below `n`, each once, in order).
+/// that list (the vertices of `active` below `n`, each once, in order): `active` itself
+/// where it is already such a list (a mask's indices always are), not a copy of it.
 #[must_use]
-pub fn bind_slots(n: usize, active: &[u32]) -> (Vec<u32>, Vec<u32>) {
+pub fn bind_slots(n: usize, active: &[u32]) -> (Vec<u32>, Cow<'_, [u32]>) {
     let mut slot = Vec::with_capacity(n);
     if n >= PARALLEL_COPY_THRESHOLD {
         (0..n)
@@ -74,7 +77,7 @@ pub fn bind_slots(n: usize, active: &[u32]) -> (Vec<u32>, Vec<u32>) {
     // written in parallel chunks.
     if strictly_ascending(active) && active.last().is_none_or(|&i| (i as usize) < n) {
         for_each_at(&mut slot, active, |k, s| *s = k as u32);
-        return (slot, active.to_vec());
+        return (slot, Cow::Borrowed(active));
     }
     let mut list = Vec::with_capacity(active.len());
     for &i in active {
@@ -83,7 +86,7 @@ pub fn bind_slots(n: usize, active: &[u32]) -> (Vec<u32>, Vec<u32>) {
             list.push(i);
         }
     }
-    (slot, list)
+    (slot, Cow::Owned(list))
 }
 
 /// An earlier bind of the same tool (the same rest state) on an input that differs from the
@@ -294,12 +297,16 @@ mod tests {
     #[test]
     fn bind_slots_number_each_active_vertex_in_range_once() {
         let (slot, list) = bind_slots(6, &[1, 4, 4, 9, 2]);
-        assert_eq!(list, [1, 4, 2]);
+        assert_eq!(*list, [1, 4, 2]);
         assert_eq!(slot, [u32::MAX, 0, 2, u32::MAX, 1, u32::MAX]);
         // An ascending list (a mask's), long enough to go parallel.
         let n = 3 * PARALLEL_COPY_THRESHOLD;
         let active: Vec<u32> = (0..n as u32).filter(|i| i % 3 != 1).collect();
         let (slot, list) = bind_slots(n, &active);
+        assert!(
+            matches!(list, Cow::Borrowed(_)),
+            "a mask's indices are not copied"
+        );
         assert_eq!(list, active);
         for (v, &s) in slot.iter().enumerate() {
             match active.binary_search(&(v as u32)) {
