@@ -220,11 +220,15 @@ impl Topology {
     }
 }
 
-/// Vertices per block of the parallel smooth normals ([`RestMesh::smooth_normals`]): on the
-/// suite's million-vertex head, blocks of 4,096 to 65,536 vertices list 8 to 4 % of the
-/// triangles twice and take 8.6 to 7.7 ms on two threads; 256 list 23 % twice and take 12
-/// (`docs/performance.md`, eighteenth session).
-const NORMAL_BLOCK: usize = 16_384;
+/// Vertices per block of the parallel smooth normals ([`RestMesh::smooth_normals`]) on a mesh
+/// of `vertices` welded vertices, for a pool of `threads`: two blocks per thread (so that a
+/// thread that falls behind hands one over), of at least 16,384 vertices. Bigger blocks list
+/// fewer triangles twice: on the suite's million-vertex head at two threads, blocks of
+/// 16,384 take 8.6–8.7 ms (median of 31), 267,471 (four blocks) 7.6, 534,942 (two) 7.1
+/// (`docs/performance.md`, twentieth session).
+fn normal_block(vertices: usize, threads: usize) -> usize {
+    vertices.div_ceil(2 * threads.max(1)).max(16_384)
+}
 
 /// A validated mesh ready for deformation: the stored mesh, its welded topology and the
 /// welded rest positions. Cheap to clone (shared).
@@ -301,10 +305,11 @@ impl RestMesh {
 
     /// [`smooth_normals`] of welded `positions` over the welded triangles: on a mesh of
     /// [`PARALLEL_COPY_THRESHOLD`] welded vertices or more and more than one thread, summed a
-    /// block of vertices at a time in parallel ([`TriangleBlocks`] in blocks of
-    /// 16,384 vertices, made once per mesh), the same bits. On one thread the
-    /// serial loop is the faster (the blocks list a few triangles twice and add a pass of
-    /// zeros: 16 ms against 12.5 on the suite's million-vertex head, 8.5 on two threads).
+    /// block of vertices at a time in parallel ([`TriangleBlocks`], two blocks per thread of
+    /// the pool that first asks, made once per mesh), the same bits on any number of threads.
+    /// On one thread the serial loop is the faster (the blocks list a few triangles twice and
+    /// add a pass of zeros: 14–16 ms against 12.5 on the suite's million-vertex head, 7.6 on
+    /// two threads).
     ///
     /// # Panics
     /// When a triangle's corner is past the end of `positions`.
@@ -319,7 +324,10 @@ impl RestMesh {
             .then(|| {
                 self.inner
                     .normal_blocks
-                    .get_or_init(|| TriangleBlocks::new(n, &topo.triangles, NORMAL_BLOCK))
+                    .get_or_init(|| {
+                        let block = normal_block(n, rayon::current_num_threads());
+                        TriangleBlocks::new(n, &topo.triangles, block)
+                    })
                     .as_ref()
             })
             .flatten();
@@ -463,6 +471,22 @@ mod tests {
         assert_eq!(out.positions, rest.mesh().positions);
         for n in out.normals {
             assert!((n - Vec3::Z).length() < 1e-6);
+        }
+    }
+
+    /// At most two blocks per thread, none below 16,384 vertices.
+    #[test]
+    fn normal_blocks_are_two_per_thread() {
+        assert_eq!(normal_block(1_069_884, 2), 267_471);
+        assert_eq!(normal_block(1_069_884, 16), 33_434);
+        assert_eq!(normal_block(1_069_884, 64), 16_384);
+        assert_eq!(normal_block(200_000, 0), 100_000);
+        for (n, t) in [(131_072, 2), (1_000_001, 3), (999_999, 8)] {
+            let b = normal_block(n, t);
+            assert!(
+                n.div_ceil(b) <= 2 * t && n.div_ceil(b) * b >= n,
+                "{n} on {t}"
+            );
         }
     }
 
