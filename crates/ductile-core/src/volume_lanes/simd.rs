@@ -197,9 +197,9 @@ impl<S: Simd> Ops<S> {
 /// into vector shuffles; other blocks (scalar code, the last partial block) are copied
 /// coordinate by coordinate.
 ///
-/// The scratch holds the largest mask a thread made (at most [`crate::chunks::CHUNK`]
-/// entries from the parallel masks, below [`crate::chunks::PARALLEL_THRESHOLD`] from the
-/// others: at most 128 KiB a thread). It replaced a mask grown by pushes, copied at each
+/// The scratch holds as many entries as the most candidates a thread weighed at once (at
+/// most [`crate::chunks::CHUNK`] in a parallel mask's chunk, fewer than
+/// [`crate::chunks::PARALLEL_THRESHOLD`] in a serial mask: under 128 KiB a thread). It replaced a mask grown by pushes, copied at each
 /// doubling of its capacity and appended to by two copies of variable length per block: the
 /// suite's million-vertex stack's masks went from 34.7–36.5 to 32.4–32.9 ms at two threads,
 /// 61.5–62.3 to 55.8–57.5 at one (`layer_profile`, alternating).
@@ -216,16 +216,14 @@ pub(super) fn mask<S: Simd>(
         Ids::List(ids) => ids.len(),
     };
     // Taken out of the thread's slot and put back, not borrowed in a closure: a closure is
-    // compiled without the dispatched target features, and the kernel inlined into it with
-    // them (ten times slower).
+    // compiled without the dispatched target features, and the kernel inlined into one ran
+    // ten times slower.
     let mut scratch = SCRATCH.take();
-    // Room for every candidate and one more block (the lanes past the positive ones are
-    // written too); the buffers keep their contents between masks, so they are zeroed only
-    // where they grow.
-    let room = total + MAX_BLOCK;
-    if scratch.indices.len() < room {
-        scratch.indices.resize(room, 0);
-        scratch.weights.resize(room, 0.0);
+    // Room for every candidate. The buffers keep their contents between masks, so they are
+    // zeroed only where they grow.
+    if scratch.indices.len() < total {
+        scratch.indices.resize(total, 0);
+        scratch.weights.resize(total, 0.0);
     }
     let count = weigh(Ops(simd), influence, ids, positions, &mut scratch);
     let mask = Mask {
@@ -244,8 +242,9 @@ std::thread_local! {
 }
 
 /// [`mask`]'s kernel: packs the vertices of `ids` of positive weight and their weights at the
-/// start of `scratch` (with room for every candidate and one more block) and returns how
-/// many there are.
+/// start of `scratch` (with room for every candidate) and returns how many there are. A
+/// block writes all its lanes after the positive vertices before it, which are at most as
+/// many as the candidates before it, so the writes stay within the candidates' room.
 #[inline(always)]
 fn weigh<S: Simd>(
     ops: Ops<S>,
