@@ -57,6 +57,13 @@ pub fn strictly_ascending(indices: &[u32]) -> bool {
     indices.windows(2).all(|w| w[0] < w[1])
 }
 
+/// Whether `indices` is strictly ascending and every index is below `n`: a mask's indices
+/// into `n` values, which parallel chunks may visit as disjoint runs.
+#[must_use]
+fn ascending_below(indices: &[u32], n: usize) -> bool {
+    strictly_ascending(indices) && indices.last().is_none_or(|&i| (i as usize) < n)
+}
+
 /// The slots of a compact per-vertex bind of `n` vertices: `slot[v]` is the position of
 /// vertex `v` in the bind's active list (`u32::MAX` for a vertex that is not active), with
 /// that list (the vertices of `active` below `n`, each once, in order): `active` itself
@@ -75,7 +82,7 @@ pub fn bind_slots(n: usize, active: &[u32]) -> (Vec<u32>, Cow<'_, [u32]>) {
     }
     // A mask's indices (strictly ascending, in range) are the list itself; their slots are
     // written in parallel chunks.
-    if strictly_ascending(active) && active.last().is_none_or(|&i| (i as usize) < n) {
+    if ascending_below(active, n) {
         for_each_at(&mut slot, active, |k, s| *s = k as u32);
         return (slot, Cow::Borrowed(active));
     }
@@ -213,9 +220,7 @@ pub fn map_chunks_at<T: Send, R: Send>(
     indices: &[u32],
     f: impl Fn(usize, &[u32], &mut ChunkValues<'_, T>) -> R + Sync + Send,
 ) -> Vec<R> {
-    let ascending =
-        strictly_ascending(indices) && indices.last().is_none_or(|&i| (i as usize) < values.len());
-    if !ascending || indices.len() <= CHUNK {
+    if !ascending_below(indices, values.len()) || indices.len() <= CHUNK {
         return vec![f(
             0,
             indices,
