@@ -24,7 +24,7 @@ pub const PARALLEL_COPY_THRESHOLD: usize = 1 << 17;
 pub const BIND_CHUNK: usize = 4096;
 
 /// From this many bytes on, [`zeroed`] writes its zeros in parallel chunks.
-pub const PARALLEL_ZERO_BYTES: usize = 1 << 21;
+pub const PARALLEL_ZERO_BYTES: usize = 1 << 18;
 
 /// `n` zeros of a plain type. From [`PARALLEL_ZERO_BYTES`] on, the zeros are written in
 /// parallel chunks: `calloc` (what `vec![0.0; n]` and `bytemuck::zeroed_vec` call) writes them
@@ -33,9 +33,12 @@ pub const PARALLEL_ZERO_BYTES: usize = 1 << 21;
 /// usual case; a million-vertex stack zeroes a few hundred megabytes of bind and deform
 /// buffers. The cost: where the allocator maps fresh pages instead (blocks of 32 MiB and more
 /// with glibc), `calloc` wrote nothing and this writes the zeros once more, in parallel.
-/// Below 2 MiB, `calloc`: such a `memset` is estimated (not measured) at about what waking a
-/// sleeping pool thread costs (150–300 µs measured on the project's VM,
-/// `docs/performance.md`).
+/// Below 256 KiB, `calloc`: such a `memset` takes a few microseconds, about what handing work
+/// to a sleeping pool thread costs. The threshold was 2 MiB until the twenty-first session,
+/// when a scheduler trace showed the pool's second thread asleep for about 24 ms of each
+/// 175 ms evaluation of the suite's million-vertex stack, with the calling thread's `memset`
+/// (the joined masks' and the binds' buffers) the largest single part; at 256 KiB the masks
+/// and binds take about 1 ms less (`docs/performance.md`).
 #[must_use]
 pub fn zeroed<T: bytemuck::Zeroable + Copy + Send + Sync>(n: usize) -> Vec<T> {
     if n.saturating_mul(size_of::<T>()) < PARALLEL_ZERO_BYTES {
