@@ -453,7 +453,20 @@ mod tests {
                 .map(|p| p.to_array().map(f32::to_bits))
                 .collect::<Vec<_>>()
         };
-        for tool in tools_at_rest().into_iter().filter(Tool::binds_per_vertex) {
+        // The shape surface at rest is its frame's plane (one rest frame for every point);
+        // a rest edit curves it (a rest frame per point).
+        let curved = tools_at_rest().into_iter().find_map(|t| match t {
+            Tool::ShapeSurface(mut t) => {
+                t.rest.push(crate::surface::SurfaceEdit {
+                    at: (2, 2),
+                    offset: Vec3::new(0.05, 0.0, 0.3),
+                });
+                Some(Tool::ShapeSurface(t))
+            }
+            _ => None,
+        });
+        let tools = tools_at_rest().into_iter().chain(curved);
+        for tool in tools.filter(Tool::binds_per_vertex) {
             let tool = match tool {
                 Tool::Curve(mut t) => {
                     t.deformed[2] += Vec3::new(0.0, 0.2, 0.3);
