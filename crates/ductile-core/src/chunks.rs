@@ -33,12 +33,13 @@ pub const PARALLEL_ZERO_BYTES: usize = 1 << 18;
 /// usual case; a million-vertex stack zeroes a few hundred megabytes of bind and deform
 /// buffers. The cost: where the allocator maps fresh pages instead (blocks of 32 MiB and more
 /// with glibc), `calloc` wrote nothing and this writes the zeros once more, in parallel.
-/// Below 256 KiB, `calloc`: such a `memset` takes a few microseconds, about what handing work
-/// to a sleeping pool thread costs. The threshold was 2 MiB until the twenty-first session,
-/// when a scheduler trace showed the pool's second thread asleep for about 24 ms of each
-/// 175 ms evaluation of the suite's million-vertex stack, with the calling thread's `memset`
-/// (the joined masks' and the binds' buffers) the largest single part; at 256 KiB the masks
-/// and binds take about 1 ms less (`docs/performance.md`).
+/// Below 256 KiB, `calloc`: such a `memset` takes an estimated 10–20 µs (not measured), about
+/// what waking a sleeping pool thread takes (8–17 µs from wake-up to running, traced). The
+/// threshold was 2 MiB until the twenty-first session, when a scheduler trace showed the
+/// pool's second thread asleep for about 24 ms of each 175 ms evaluation of the suite's
+/// million-vertex stack, with the calling thread's `memset` (the joined masks' and the binds'
+/// buffers) the largest single part; at 256 KiB the masks take about 1 ms less, and so do the
+/// binds (`docs/performance.md`).
 #[must_use]
 pub fn zeroed<T: bytemuck::Zeroable + Copy + Send + Sync>(n: usize) -> Vec<T> {
     if n.saturating_mul(size_of::<T>()) < PARALLEL_ZERO_BYTES {
@@ -56,7 +57,7 @@ pub fn zeroed<T: bytemuck::Zeroable + Copy + Send + Sync>(n: usize) -> Vec<T> {
 /// Whether `indices` is strictly ascending (sorted, each once), as an influence mask's
 /// indices are.
 ///
-/// The pairs are compared [`ASCENDING_BLOCK`] at a time without a branch per pair, which
+/// The pairs are compared 64 at a time (`ASCENDING_BLOCK`) without a branch per pair, which
 /// compiles to vector compares, stopping after the first block with a pair out of order.
 /// The evaluation checks every layer's mask this way (the blend, the binds' slots), on the
 /// thread that then starts the parallel work: 500,000 indices take 66 µs here against 250 µs
@@ -99,7 +100,7 @@ pub fn bind_slots(n: usize, active: &[u32]) -> (Vec<u32>, Cow<'_, [u32]>) {
         slot.resize(n, u32::MAX);
     }
     // A mask's indices (strictly ascending, in range) are the list itself; their slots are
-    // written in parallel chunks.
+    // written in order, or in parallel chunks from `PARALLEL_COPY_THRESHOLD` indices on.
     if ascending_below(active, n) {
         if active.len() < PARALLEL_COPY_THRESHOLD {
             for (k, &i) in active.iter().enumerate() {

@@ -356,7 +356,8 @@ struct RestFrame {
 enum RestFrames {
     /// Every point's frame.
     Plane(RestFrame),
-    /// Per bound point, in the order of `SurfaceBind::points`.
+    /// Per bound point, in the order of `SurfaceBind::points`; empty for a plane without a
+    /// normal, where no point projects and no frame is read.
     PerPoint(Vec<RestFrame>),
 }
 
