@@ -102,18 +102,9 @@ pub fn bind_slots(n: usize, active: &[u32]) -> (Vec<u32>, Cow<'_, [u32]>) {
     // A mask's indices (strictly ascending, in range) are the list itself; their slots are
     // written in order, or in parallel chunks from `PARALLEL_COPY_THRESHOLD` indices on.
     if ascending_below(active, n) {
-        if active.len() < PARALLEL_COPY_THRESHOLD {
-            for (k, &i) in active.iter().enumerate() {
-                slot[i as usize] = k as u32;
-            }
-        } else {
-            // Checked above: not again in `for_each_at`.
-            map_ascending_chunks(&mut slot, active, |k0, chunk, part| {
-                for (j, &i) in chunk.iter().enumerate() {
-                    *part.get(i) = (k0 + j) as u32;
-                }
-            });
-        }
+        // Checked here: not again in `for_each_at`.
+        let parallel = active.len() >= PARALLEL_COPY_THRESHOLD;
+        visit_at(&mut slot, active, parallel, |k, s| *s = k as u32);
         return (slot, Cow::Borrowed(active));
     }
     let mut list = Vec::with_capacity(active.len());
@@ -213,15 +204,28 @@ pub fn for_each_at<T: Send>(
     indices: &[u32],
     f: impl Fn(usize, &mut T) + Sync + Send,
 ) {
-    if indices.len() < PARALLEL_COPY_THRESHOLD {
+    let parallel =
+        indices.len() >= PARALLEL_COPY_THRESHOLD && ascending_below(indices, values.len());
+    visit_at(values, indices, parallel, f);
+}
+
+/// [`for_each_at`]'s calls: in parallel chunks when `parallel` (which needs `indices`
+/// strictly ascending and below `values.len()`, [`ascending_below`]), otherwise in order.
+fn visit_at<T: Send>(
+    values: &mut [T],
+    indices: &[u32],
+    parallel: bool,
+    f: impl Fn(usize, &mut T) + Sync + Send,
+) {
+    if !parallel {
         for (k, &i) in indices.iter().enumerate() {
             f(k, &mut values[i as usize]);
         }
         return;
     }
-    map_chunks_at(values, indices, |k0, chunk, slice| {
+    map_ascending_chunks(values, indices, |k0, chunk, part| {
         for (j, &i) in chunk.iter().enumerate() {
-            f(k0 + j, slice.get(i));
+            f(k0 + j, part.get(i));
         }
     });
 }

@@ -536,37 +536,34 @@ impl ShapeSurfaceTool {
         let (mut slot, active) = bind_slots(input.positions.len(), input.active);
         let m = active.len();
         let stride = 2 * (pu + 1) + 2 * (pv + 1);
-        // The plane's one frame: where it has no normal, no point projects.
-        let plane_frame = plane.as_ref().map(|p| {
+        // The plane's one frame (a plane without a normal has none, and no point projects),
+        // or a frame per point on a curved rest surface.
+        let shared = plane.as_ref().and_then(|p| {
             p.normal.map(|normal| RestFrame {
                 normal,
                 du: p.u_edge,
                 dv: p.v_edge,
             })
         });
+        let per_point = plane.is_none();
         let mut points: Vec<Bound> = zeroed(m);
-        let mut frames: Vec<RestFrame> = if plane.is_some() {
-            Vec::new()
-        } else {
-            zeroed(m)
-        };
+        let mut frames: Vec<RestFrame> = if per_point { zeroed(m) } else { Vec::new() };
         let mut weights = zeroed(m * stride);
         let mut projects = zeroed(m);
         // The same knots and the same kind of frames (the plane's, the same one), as a bind
         // of the same rest state has.
         let previous = previous.filter(|p| {
             p.bind.knots == knots
-                && match (&p.bind.frames, plane_frame) {
-                    (RestFrames::Plane(f), Some(Some(g))) => *f == g,
-                    (RestFrames::PerPoint(_), None) => true,
-                    _ => false,
+                && match &p.bind.frames {
+                    RestFrames::Plane(f) => shared == Some(*f),
+                    RestFrames::PerPoint(_) => per_point,
                 }
         });
         // Per chunk, its part of `frames` (none on a plane, where `frames` is empty).
-        let frame_parts: Vec<Option<&mut [RestFrame]>> = if plane.is_some() {
-            (0..m.div_ceil(BIND_CHUNK)).map(|_| None).collect()
-        } else {
+        let frame_parts: Vec<Option<&mut [RestFrame]>> = if per_point {
             frames.chunks_mut(BIND_CHUNK).map(Some).collect()
+        } else {
+            (0..m.div_ceil(BIND_CHUNK)).map(|_| None).collect()
         };
         points
             .par_chunks_mut(BIND_CHUNK)
@@ -617,10 +614,10 @@ impl ShapeSurfaceTool {
         for (&i, _) in active.iter().zip(&projects).filter(|(_, p)| !**p) {
             slot[i as usize] = UNPROJECTED;
         }
-        let frames = match plane_frame {
-            Some(Some(f)) => RestFrames::Plane(f),
-            // A plane without a normal: no point projects, and no frame is read.
-            Some(None) => RestFrames::PerPoint(Vec::new()),
+        // A plane without a normal keeps no frame (`frames` is empty): no point projects,
+        // and none is read.
+        let frames = match shared {
+            Some(f) => RestFrames::Plane(f),
             None => RestFrames::PerPoint(frames),
         };
         Ok(SurfaceBind {

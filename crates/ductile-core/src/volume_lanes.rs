@@ -28,6 +28,16 @@ pub(crate) enum Ids<'a> {
     List(&'a [u32]),
 }
 
+impl Ids<'_> {
+    /// How many vertices.
+    fn len(self) -> usize {
+        match self {
+            Ids::Range(start, end) => (end - start) as usize,
+            Ids::List(ids) => ids.len(),
+        }
+    }
+}
+
 /// A volume's shape in its local frame, in a form the lanes evaluate.
 #[derive(Debug, Clone)]
 enum LaneShape {

@@ -199,10 +199,11 @@ impl<S: Simd> Ops<S> {
 ///
 /// The scratch holds as many entries as the most candidates a thread weighed at once (at
 /// most [`crate::chunks::CHUNK`] in a parallel mask's chunk, fewer than
-/// [`crate::chunks::PARALLEL_THRESHOLD`] in a serial mask: under 128 KiB a thread). It replaced a mask grown by pushes, copied at each
-/// doubling of its capacity and appended to by two copies of variable length per block: the
-/// suite's million-vertex stack's masks went from 34.7–36.5 to 32.4–32.9 ms at two threads,
-/// 61.5–62.3 to 55.8–57.5 at one (`layer_profile`, alternating).
+/// [`crate::chunks::PARALLEL_THRESHOLD`] in a serial mask: under 128 KiB a thread). It
+/// replaced a mask grown by pushes, copied at each doubling of its capacity and appended to
+/// by two copies of variable length per block: the suite's million-vertex stack's masks went
+/// from 34.7–36.5 to 32.4–32.9 ms at two threads, 61.5–62.3 to 55.8–57.5 at one
+/// (`layer_profile`, alternating).
 #[inline(always)]
 pub(super) fn mask<S: Simd>(
     simd: S,
@@ -211,10 +212,7 @@ pub(super) fn mask<S: Simd>(
     positions: &[Vec3],
 ) -> Mask {
     debug_assert!(2 * S::F32_LANES <= MAX_BLOCK);
-    let total = match ids {
-        Ids::Range(start, end) => (end - start) as usize,
-        Ids::List(ids) => ids.len(),
-    };
+    let total = ids.len();
     // Taken out of the thread's slot and put back, not borrowed in a closure: a closure is
     // compiled without the dispatched target features, and the kernel inlined into one ran
     // ten times slower.
@@ -235,9 +233,7 @@ pub(super) fn mask<S: Simd>(
 }
 
 std::thread_local! {
-    /// Where [`mask`] packs a mask before copying it out at its length: a mask grown entry by
-    /// entry is copied at every doubling of its capacity and appended to by a copy of
-    /// variable length per block.
+    /// Where [`mask`] packs a mask before copying it out at its length (see there why).
     static SCRATCH: std::cell::RefCell<Mask> = std::cell::RefCell::new(Mask::default());
 }
 
@@ -254,10 +250,11 @@ fn weigh<S: Simd>(
     scratch: &mut Mask,
 ) -> usize {
     let n = 2 * S::F32_LANES;
-    let (first, total) = match ids {
-        Ids::Range(start, end) => (start as usize, (end - start) as usize),
-        Ids::List(ids) => (0, ids.len()),
+    let first = match ids {
+        Ids::Range(start, _) => start as usize,
+        Ids::List(_) => 0,
     };
+    let total = ids.len();
     let mut count = 0;
     let mut w = [0.0_f32; MAX_BLOCK];
     for b in (0..total).step_by(n) {
