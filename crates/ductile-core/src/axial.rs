@@ -384,7 +384,8 @@ impl AxialTool {
                 let (mut ls, mut bs, mut done) =
                     (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n], vec![false; n]);
                 table.bind_each(&found, &xs, &ws, &mut ls, &mut bs, &mut done);
-                for (k, ((&v, u), (j, f, _))) in fresh.iter().zip(xs).zip(found).enumerate() {
+                for (k, (u, (j, f, _))) in xs.into_iter().zip(found).enumerate() {
+                    let v = fresh.slot(k);
                     let w = ws[k];
                     if w <= 0.0 {
                         continue;

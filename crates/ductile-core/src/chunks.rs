@@ -171,17 +171,22 @@ impl<'a, B: Slotted> Reuse<'a, B> {
     /// Splits a chunk of active vertices `ids` of a bind into those whose entry an earlier
     /// bind gives — `copy(j, old, s)` copies entry `s` of `old` into the chunk's slot `j` —
     /// and the others, whose chunk slots and input `positions` it returns: the queries the
-    /// new bind answers (a lane group at a time).
+    /// new bind answers (a lane group at a time). Without an earlier bind every vertex is a
+    /// query, in order, and only the positions are gathered.
     pub fn split_chunk(
         previous: Option<Self>,
         ids: &[u32],
         positions: &[glam::Vec3],
         mut copy: impl FnMut(usize, &'a B, usize),
-    ) -> (Vec<usize>, Vec<glam::Vec3>) {
+    ) -> (Fresh, Vec<glam::Vec3>) {
+        let Some(previous) = previous else {
+            let xs = ids.iter().map(|&i| positions[i as usize]).collect();
+            return (Fresh::Every, xs);
+        };
         let mut fresh = Vec::with_capacity(ids.len());
         let mut xs = Vec::with_capacity(ids.len());
         for (j, &i) in ids.iter().enumerate() {
-            match previous.and_then(|p| p.entry(i)) {
+            match previous.entry(i) {
                 Some((old, s)) => copy(j, old, s),
                 None => {
                     fresh.push(j);
@@ -189,7 +194,41 @@ impl<'a, B: Slotted> Reuse<'a, B> {
                 }
             }
         }
-        (fresh, xs)
+        if fresh.len() == ids.len() {
+            return (Fresh::Every, xs);
+        }
+        (Fresh::Listed(fresh), xs)
+    }
+}
+
+/// The chunk slots of the queries a bind answers ([`Reuse::split_chunk`]): query `k` goes to
+/// slot [`Fresh::slot`]`(k)`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Fresh {
+    /// Every slot of the chunk, in order: query `k` is slot `k`.
+    Every,
+    /// These slots, ascending, one per query.
+    Listed(Vec<usize>),
+}
+
+impl Fresh {
+    /// The chunk slot of query `k`.
+    ///
+    /// # Panics
+    /// When `k` is past the listed slots.
+    #[must_use]
+    #[inline]
+    pub fn slot(&self, k: usize) -> usize {
+        match self {
+            Self::Every => k,
+            Self::Listed(slots) => slots[k],
+        }
+    }
+
+    /// Whether every slot of the chunk is a query, in order.
+    #[must_use]
+    pub fn is_every(&self) -> bool {
+        matches!(self, Self::Every)
     }
 }
 

@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all, bernstein_all_with_derivative};
-use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots, zeroed};
+use crate::chunks::{BIND_CHUNK, Fresh, Reuse, Slotted, bind_slots, zeroed};
 use crate::curve_pieces::{Closest, CurvePieces};
 use crate::error::{CoreError, Result, check_finite_vec3};
 use crate::frames::PolylineIndex;
@@ -395,21 +395,35 @@ impl CurveTool {
                     });
                 let mut found = vec![(Closest::default(), 0.0); xs.len()];
                 pieces.closest_each(&xs, &mut found);
-                if fresh.len() == ids.len() {
-                    // Nothing reused in this chunk (a first bind, say): the weights go
-                    // straight to it.
-                    pieces.weights_each(&found, weights);
-                } else {
-                    let mut fresh_weights = vec![0.0; xs.len() * stride];
-                    pieces.weights_each(&found, &mut fresh_weights);
-                    for (&j, w) in fresh.iter().zip(fresh_weights.chunks_exact(stride)) {
-                        weights[j * stride..(j + 1) * stride].copy_from_slice(w);
+                match &fresh {
+                    // Nothing reused in this chunk (a first bind, say): the answers go
+                    // straight to it, in order.
+                    Fresh::Every => {
+                        pieces.weights_each(&found, weights);
+                        for ((((p, o), f), x), (c, _)) in params
+                            .iter_mut()
+                            .zip(offsets.iter_mut())
+                            .zip(firsts.iter_mut())
+                            .zip(xs)
+                            .zip(found)
+                        {
+                            *p = c.t;
+                            *o = x - c.point;
+                            *f = pieces.first(c.piece) as u32;
+                        }
                     }
-                }
-                for ((&j, x), (c, _)) in fresh.iter().zip(xs).zip(found) {
-                    params[j] = c.t;
-                    offsets[j] = x - c.point;
-                    firsts[j] = pieces.first(c.piece) as u32;
+                    Fresh::Listed(slots) => {
+                        let mut fresh_weights = vec![0.0; xs.len() * stride];
+                        pieces.weights_each(&found, &mut fresh_weights);
+                        for (&j, w) in slots.iter().zip(fresh_weights.chunks_exact(stride)) {
+                            weights[j * stride..(j + 1) * stride].copy_from_slice(w);
+                        }
+                        for ((&j, x), (c, _)) in slots.iter().zip(xs).zip(found) {
+                            params[j] = c.t;
+                            offsets[j] = x - c.point;
+                            firsts[j] = pieces.first(c.piece) as u32;
+                        }
+                    }
                 }
             });
         Ok(CurveBind {

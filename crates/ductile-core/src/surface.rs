@@ -593,15 +593,17 @@ impl ShapeSurfaceTool {
                     }
                     let mut found = vec![None; xs.len()];
                     plane.project_each(&xs, &mut found);
-                    for (&j, p) in fresh.iter().zip(found) {
+                    for (k, p) in found.into_iter().enumerate() {
                         if let Some(p) = p {
+                            let j = fresh.slot(k);
                             points[j] = bound(p, &mut weights[j * stride..(j + 1) * stride]);
                             projects[j] = true;
                         }
                     }
                     return;
                 }
-                for (&j, x) in fresh.iter().zip(xs) {
+                for (k, x) in xs.into_iter().enumerate() {
+                    let j = fresh.slot(k);
                     if let Some((b, f)) = project(x, &mut weights[j * stride..(j + 1) * stride]) {
                         points[j] = b;
                         projects[j] = true;
