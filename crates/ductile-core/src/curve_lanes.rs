@@ -78,7 +78,7 @@ impl CurvePieces {
     fn point_and_tangent_lanes(&self, k: Lane, u: Lane) -> (Lanes3, Lanes3) {
         let p = self.degree;
         let q = p.max(1);
-        let pieces = Pieces::new(k, self.count, Permute::NONE);
+        let pieces = Pieces::new(k, self.count);
         let mut c = Lanes3::ZERO;
         for i in (0..=p).rev() {
             c = c.scale(u).add(pieces.gather(&self.curve, p + 1, i));
@@ -166,7 +166,8 @@ pub(crate) struct Permute {
 }
 
 impl Permute {
-    /// No permutation: the coefficients are gathered lane by lane.
+    /// None: the steps run on the lanes, as where the CPU has no AVX2 (for the tests).
+    #[cfg(test)]
     pub(crate) const NONE: Self = Self {
         #[cfg(target_arch = "x86_64")]
         v3: None,
@@ -196,31 +197,23 @@ struct Pieces {
 }
 
 impl Pieces {
+    /// The pieces of the lanes `k`, for the lane form: gathered lane by lane unless every
+    /// lane is on one piece (the register form builds its own, with the window:
+    /// `Pieces::from_registers`).
     #[inline(always)]
-    fn new(k: Lane, count: usize, permute: Permute) -> Self {
+    fn new(k: Lane, count: usize) -> Self {
         let k = indices(k, count);
         let (mut first, mut last) = (k[0], k[0]);
         for &kj in &k[1..] {
             first = first.min(kj);
             last = last.max(kj);
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = permute;
         Self {
             k,
             first,
             same: first == last,
             #[cfg(target_arch = "x86_64")]
-            window: match permute.v3 {
-                Some(v3) if last - first < 16 => {
-                    let mut rel = [0_i32; LANES];
-                    for (r, &kj) in rel.iter_mut().zip(&k) {
-                        *r = (kj - first) as i32;
-                    }
-                    Some((v3, bytemuck::cast(rel), last - first >= 8))
-                }
-                _ => None,
-            },
+            window: None,
         }
     }
 
@@ -279,9 +272,7 @@ impl pulp::WithSimd for ClosestEach<'_> {
             // With AVX2 the steps run on registers, else on the lanes (the same bits).
             #[cfg(target_arch = "x86_64")]
             let (k, u, c, d2) = match self.permute.v3 {
-                Some(v3) => {
-                    pieces.closest_registers(v3, &x, seeds.segment, seeds.fraction, self.permute)
-                }
+                Some(v3) => pieces.closest_registers(v3, &x, seeds.segment, seeds.fraction),
                 None => pieces.closest_lanes(&x, seeds.segment, seeds.fraction),
             };
             #[cfg(not(target_arch = "x86_64"))]

@@ -17,9 +17,9 @@ use core::arch::x86_64::{__m256, __m256i};
 use pulp::x86::V3;
 use pulp::{f32x8, m32x8};
 
-use super::{Permute, Pieces};
+use super::Pieces;
 use crate::curve_pieces::{CurvePieces, REFINE_STEPS};
-use crate::lane::{Lane, Lanes3};
+use crate::lane::{LANES, Lane, Lanes3};
 use crate::registers::{Block, Ops, Two, two};
 
 /// A value of a lane group: two registers.
@@ -88,7 +88,6 @@ impl CurvePieces {
         x: &Lanes3,
         seg: Lane,
         frac: Lane,
-        permute: Permute,
     ) -> (Lane, Lane, Lanes3, Lane) {
         let o = Ops(v3);
         let x = block(x);
@@ -96,7 +95,7 @@ impl CurvePieces {
         let infinity = o.splat(f32::INFINITY);
         let last = o.splat((self.count - 1) as f32);
         let (mut k, mut u) = self.settled_registers(o, regs(seg), regs(frac));
-        let (mut c, mut dc) = self.point_and_tangent_registers(o, k, u, permute);
+        let (mut c, mut dc) = self.point_and_tangent_registers(o, k, u);
         let mut best = o.length_squared(o.sub3(c, x));
         let mut going: M = o.eq(zero, zero);
         for _ in 0..REFINE_STEPS {
@@ -119,7 +118,7 @@ impl CurvePieces {
                 o.select(above, o.clamp01(o.sub(next, ahead)), next),
             );
             let (kn, un) = self.settled_registers(o, kn, un);
-            let (cn, dn) = self.point_and_tangent_registers(o, kn, un, permute);
+            let (cn, dn) = self.point_and_tangent_registers(o, kn, un);
             let d = o.length_squared(o.sub3(cn, x));
             going = o.and(going, o.lt(d, best));
             best = o.select(going, d, best);
@@ -142,16 +141,10 @@ impl CurvePieces {
 
     /// [`CurvePieces::point_and_tangent_lanes`] in registers.
     #[inline(always)]
-    fn point_and_tangent_registers(
-        &self,
-        o: Ops<V3>,
-        k: R,
-        u: R,
-        permute: Permute,
-    ) -> (Block<V3>, Block<V3>) {
+    fn point_and_tangent_registers(&self, o: Ops<V3>, k: R, u: R) -> (Block<V3>, Block<V3>) {
         let p = self.degree;
         let q = p.max(1);
-        let pieces = Pieces::new(lane(k), self.count, permute);
+        let pieces = Pieces::from_registers(o.0, k, self.count);
         let zero = o.splat3(glam::Vec3::ZERO);
         let (mut c, mut d) = (zero, zero);
         // Three Horner loops, one per way of taking the coefficients, on purpose: one loop
@@ -229,4 +222,57 @@ fn permuted(v3: V3, run: &[f32], rel: [__m256i; 2], wide: bool) -> [__m256; 2] {
         }
     }
     out
+}
+
+impl Pieces {
+    /// [`Pieces::new`] of the lanes' pieces `k` in registers, with the register permutation:
+    /// the same fields, from vector operations. The pieces are clamped as `indices` clamps
+    /// them (`(k as usize).min(count − 1)`: `vmaxps` gives its second operand, 0, for a NaN,
+    /// and every value left is an exact integer below `2²⁴`), their least and greatest taken
+    /// across the registers, and each lane's place in the window is a vector difference.
+    /// The pieces one by one, read back from memory, are only written out where the lanes
+    /// are gathered one by one (neither one piece nor a window of 16): `Pieces::new` wrote
+    /// them, and the window, a lane at a time, and the window's registers then waited for
+    /// those sixteen stores.
+    #[inline(always)]
+    fn from_registers(v3: V3, k: R, count: usize) -> Self {
+        let (avx, avx2) = (v3.avx, v3.avx2);
+        let zero = avx._mm256_setzero_ps();
+        let top = avx._mm256_set1_ps((count - 1) as f32);
+        let pieces: [__m256i; 2] = two!(|h| {
+            let kh: __m256 = bytemuck::cast(k[h]);
+            avx._mm256_cvttps_epi32(avx._mm256_min_ps(avx._mm256_max_ps(kh, zero), top))
+        });
+        let least = avx2._mm256_min_epi32(pieces[0], pieces[1]);
+        let least = avx2._mm256_min_epi32(least, avx2._mm256_permute2x128_si256::<1>(least, least));
+        let least = avx2._mm256_min_epi32(least, avx2._mm256_shuffle_epi32::<0b0100_1110>(least));
+        let least = avx2._mm256_min_epi32(least, avx2._mm256_shuffle_epi32::<0b1011_0001>(least));
+        let most = avx2._mm256_max_epi32(pieces[0], pieces[1]);
+        let most = avx2._mm256_max_epi32(most, avx2._mm256_permute2x128_si256::<1>(most, most));
+        let most = avx2._mm256_max_epi32(most, avx2._mm256_shuffle_epi32::<0b0100_1110>(most));
+        let most = avx2._mm256_max_epi32(most, avx2._mm256_shuffle_epi32::<0b1011_0001>(most));
+        // Both in `0..count`, so the casts are exact.
+        let (first, last) = (
+            avx2._mm256_cvtsi256_si32(least) as usize,
+            avx2._mm256_cvtsi256_si32(most) as usize,
+        );
+        let same = first == last;
+        let window = (last - first < 16).then(|| {
+            let rel = two!(|h| avx2._mm256_sub_epi32(pieces[h], least));
+            (v3, rel, last - first >= 8)
+        });
+        let mut k = [0; LANES];
+        if !same && window.is_none() {
+            let each: [i32; LANES] = bytemuck::cast(pieces);
+            for (o, &kj) in k.iter_mut().zip(&each) {
+                *o = kj as usize;
+            }
+        }
+        Self {
+            k,
+            first,
+            same,
+            window,
+        }
+    }
 }
