@@ -212,16 +212,34 @@ pub(super) fn load<S: Simd>(simd: S, f: &Frame<S>, positions: &[Vec3], idx: &[u3
     let zero = simd.splat_f32s(0.0);
     let n = idx.len();
     let mut p = [[0.0_f32; MAX_LANES]; 3];
-    for (l, &i) in idx.iter().enumerate() {
-        let v = positions[i as usize];
-        p[0][l] = v.x;
-        p[1][l] = v.y;
-        p[2][l] = v.z;
-    }
     let mut x = [zero; 3];
+    if n == S::F32_LANES {
+        // A whole register: each axis's values gathered into an array of its own that the
+        // compiler builds in a register, then stored for the lanes' reads. Written into `p`
+        // one value at a time, a register loaded from it waited for those stores (and the
+        // partial load is a call).
+        for (a, x) in x.iter_mut().enumerate() {
+            let mut lanes = [0.0_f32; MAX_LANES];
+            for (v, &i) in lanes[..S::F32_LANES].iter_mut().zip(idx) {
+                *v = positions[i as usize][a];
+            }
+            *x = bytemuck::pod_read_unaligned(bytemuck::cast_slice(&lanes[..S::F32_LANES]));
+            bytemuck::cast_slice_mut::<f32, u8>(&mut p[a][..n])
+                .copy_from_slice(bytemuck::bytes_of(x));
+        }
+    } else {
+        for (l, &i) in idx.iter().enumerate() {
+            let v = positions[i as usize];
+            p[0][l] = v.x;
+            p[1][l] = v.y;
+            p[2][l] = v.z;
+        }
+        for a in 0..3 {
+            x[a] = simd.partial_load_f32s(&p[a][..n]);
+        }
+    }
     let mut d = [zero; 3];
     for a in 0..3 {
-        x[a] = simd.partial_load_f32s(&p[a][..n]);
         d[a] = simd.sub_f32s(x[a], f.origin[a]);
     }
     let mut u = [zero; 3];
