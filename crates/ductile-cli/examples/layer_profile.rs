@@ -65,6 +65,7 @@ fn profile(stack: &Stack, rest: &RestMesh, print: bool) -> anyhow::Result<[f64; 
             "layer", "active", "mask ms", "bind ms", "deform ms", "output ms"
         );
     }
+    let mut scratch = Vec::new();
     for layer in &stack.layers {
         let t0 = Instant::now();
         // As `Stack::evaluate_surface` weighs a volume over every vertex: over the boxes
@@ -83,7 +84,7 @@ fn profile(stack: &Stack, rest: &RestMesh, print: bool) -> anyhow::Result<[f64; 
         let binding =
             LayerBinding::bind_masked(&layer.tool, Arc::new(mask), &positions, rest.topology())?;
         let t2 = Instant::now();
-        binding.apply(layer, &mut positions)?;
+        binding.apply_with(layer, &mut positions, &mut scratch)?;
         let t3 = Instant::now();
         let times = [ms(t0, t1), ms(t1, t2), ms(t2, t3)];
         for (t, x) in totals.iter_mut().zip(times) {

@@ -11,6 +11,7 @@
 //! Vertices outside the mask keep their input bits. The rest mesh is never modified.
 //! [`LayerBinding`] is the unit a cache keeps between evaluations.
 
+use std::borrow::Cow;
 use std::sync::Arc;
 
 use glam::Vec3;
@@ -20,7 +21,7 @@ use crate::chunks::{CHUNK, PARALLEL_THRESHOLD, Reuse, for_each_at, gather_at, sc
 use crate::error::{CoreError, Result, check_finite};
 use crate::influence::{ChunkBounds, Influence, Mask};
 use crate::mesh::{Deformed, RestMesh, Topology};
-use crate::refinement::{EdgePoint, RefinedMesh, WholeDeform};
+use crate::refinement::{EdgePoint, LayerRefinement, RefinedMesh};
 use crate::tool::{BindInput, Tool, ToolBind};
 
 /// One resolved layer: a tool in mesh space, its influence, weight and enabled flag.
@@ -190,11 +191,23 @@ impl LayerBinding {
     /// refining tool is evaluated without its refinement here; see
     /// [`LayerBinding::apply_refining`].
     pub fn apply(&self, layer: &Layer, positions: &mut [Vec3]) -> Result<()> {
+        self.apply_with(layer, positions, &mut Vec::new())
+    }
+
+    /// [`LayerBinding::apply`], with the tool's outputs written to `scratch` (grown when
+    /// shorter than the mask, its values overwritten): an evaluation that passes the same
+    /// buffer to every layer zeroes it once per size it grows to, not once per layer.
+    pub fn apply_with(
+        &self,
+        layer: &Layer,
+        positions: &mut [Vec3],
+        scratch: &mut Vec<Vec3>,
+    ) -> Result<()> {
         let Some(bind) = &self.bind else {
             return Ok(());
         };
-        let out = self.deform(layer, bind, positions, false)?.out;
-        self.blend(layer, &out, positions);
+        let out = self.deform(layer, bind, positions, false, scratch)?;
+        self.blend(layer, &out.out, positions);
         Ok(())
     }
 
@@ -208,10 +221,21 @@ impl LayerBinding {
         layer: &Layer,
         positions: &mut Vec<Vec3>,
     ) -> Result<Option<Vec<EdgePoint>>> {
+        self.apply_refining_with(layer, positions, &mut Vec::new())
+    }
+
+    /// [`LayerBinding::apply_refining`], with a per-vertex tool's outputs written to
+    /// `scratch`, as in [`LayerBinding::apply_with`].
+    pub fn apply_refining_with(
+        &self,
+        layer: &Layer,
+        positions: &mut Vec<Vec3>,
+        scratch: &mut Vec<Vec3>,
+    ) -> Result<Option<Vec<EdgePoint>>> {
         let Some(bind) = &self.bind else {
             return Ok(None);
         };
-        let result = self.deform(layer, bind, positions, true)?;
+        let result = self.deform(layer, bind, positions, true, scratch)?;
         let Some(refinement) = result.refinement else {
             self.blend(layer, &result.out, positions);
             return Ok(None);
@@ -268,27 +292,36 @@ impl LayerBinding {
         Ok(true)
     }
 
-    /// The tool's output for every active vertex: whole-layer tools in one call, the others
-    /// in (parallel) chunks; checked to be finite.
-    fn deform(
+    /// The tool's output for every active vertex, checked to be finite: whole-layer tools
+    /// in one call, the others in (parallel) chunks written to the first `active.len()`
+    /// values of `scratch` (grown with zeros when shorter).
+    fn deform<'s>(
         &self,
         layer: &Layer,
         bind: &ToolBind,
         positions: &[Vec3],
         refine: bool,
-    ) -> Result<WholeDeform> {
+        scratch: &'s mut Vec<Vec3>,
+    ) -> Result<Deformation<'s>> {
         let active = &self.mask.indices;
         let (result, bad) = match layer.tool.deform_whole(bind, positions, refine) {
             Some(r) => {
                 let r = r?;
                 let bad = first_non_finite(&r.out);
+                let r = Deformation {
+                    out: Cow::Owned(r.out),
+                    refinement: r.refinement,
+                };
                 (r, bad)
             }
             None => {
-                let mut out = zeroed(active.len());
-                let bad = deform_chunks(&layer.tool, bind, positions, active, &mut out);
-                let r = WholeDeform {
-                    out,
+                if scratch.len() < active.len() {
+                    *scratch = zeroed(active.len());
+                }
+                let out = &mut scratch[..active.len()];
+                let bad = deform_chunks(&layer.tool, bind, positions, active, out);
+                let r = Deformation {
+                    out: Cow::Borrowed(out),
                     refinement: None,
                 };
                 (r, bad)
@@ -368,6 +401,13 @@ fn deform_chunks(
     }
 }
 
+/// A layer's tool outputs, in mask order: a whole-layer tool's own (with its refinement),
+/// or a per-vertex tool's in the evaluation's scratch buffer.
+struct Deformation<'s> {
+    out: Cow<'s, [Vec3]>,
+    refinement: Option<LayerRefinement>,
+}
+
 /// What [`LayerBinding::apply_recorded`] returns.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Recorded {
@@ -417,6 +457,8 @@ impl Stack {
         // The boxes of the vertex chunks, for the masks of volumes over every vertex of a
         // big mesh (built at the first such mask, then kept up to date).
         let mut bounds: Option<ChunkBounds> = None;
+        // The per-vertex tools' outputs, one buffer for every layer.
+        let mut scratch = Vec::new();
         for layer in self.layers.iter().filter(|l| !l.is_inert()) {
             let topology = refined.as_ref().map_or(rest.topology(), |r| &r.topology);
             let mask = match &layer.influence {
@@ -435,7 +477,9 @@ impl Stack {
                 // the boxes are built again for the new count).
                 b.mark(&binding.mask.indices);
             }
-            if let Some(splits) = binding.apply_refining(layer, &mut positions)? {
+            if let Some(splits) =
+                binding.apply_refining_with(layer, &mut positions, &mut scratch)?
+            {
                 let base = match refined.take() {
                     Some(r) => r,
                     None => RefinedMesh::unrefined(rest.mesh(), rest.topology()),
@@ -541,6 +585,18 @@ mod tests {
         assert_eq!(bits(&rec.saved), bits(&gather_at(&input, idx)));
         assert_eq!(bits(&rec.written), bits(&gather_at(&plain, idx)));
         assert!(rec.saved.iter().zip(&rec.written).any(|(a, b)| a != b));
+        // Through a scratch buffer left by a bigger layer (longer than the mask, every value
+        // not finite), or one too short: the same bits, and the buffer keeps its length or
+        // grows to the mask's.
+        for len in [binding.mask.len() + 1000, 17] {
+            let mut scratch = vec![Vec3::NAN; len];
+            let mut through = input.clone();
+            binding
+                .apply_with(&layer, &mut through, &mut scratch)
+                .unwrap();
+            assert_eq!(bits(&through), bits(&plain), "scratch of {len}");
+            assert_eq!(scratch.len(), len.max(binding.mask.len()));
+        }
     }
 
     /// A per-vertex layer over a parallel number of vertices, two of whose inputs are not
