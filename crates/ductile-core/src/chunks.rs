@@ -224,12 +224,6 @@ impl Fresh {
             Self::Listed(slots) => slots[k],
         }
     }
-
-    /// Whether every slot of the chunk is a query, in order.
-    #[must_use]
-    pub fn is_every(&self) -> bool {
-        matches!(self, Self::Every)
-    }
 }
 
 /// Calls `f(k, &mut values[indices[k]])` for every `k`. When `indices` has at least

@@ -399,6 +399,7 @@ impl CurveTool {
                     // Nothing reused in this chunk (a first bind, say): the answers go
                     // straight to it, in order.
                     Fresh::Every => {
+                        debug_assert_eq!(xs.len(), params.len(), "every slot is a query");
                         pieces.weights_each(&found, weights);
                         for ((((p, o), f), x), (c, _)) in params
                             .iter_mut()

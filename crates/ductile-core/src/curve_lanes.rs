@@ -415,6 +415,48 @@ mod tests {
         }
     }
 
+    /// A curve of 39 spans (17 or 18 pieces each) and lane groups of points spread along it
+    /// over 0 to 40 pieces in half-piece steps and over 34 and 85, each also with a NaN lane:
+    /// the steps take the lanes' coefficients from one piece, from a window of 8 pieces,
+    /// from one of 16 (a second run of 8 and a blend), and lane by lane, all with the scalar
+    /// bits, the windows' edges (a spread of 7 or 8 pieces, 15 or 16) included.
+    #[test]
+    fn lane_groups_over_many_pieces_have_the_scalar_bits() {
+        let ctrl: Vec<Vec3> = (0..40)
+            .map(|i| {
+                let s = i as f32;
+                Vec3::new(s, (s * 0.9).sin() * 0.5, (s * 0.4).cos() * 0.3)
+            })
+            .collect();
+        // A point near the control polygon at `t ∈ [0, 39]`.
+        let near = |t: f32| {
+            let k = (t as usize).min(38);
+            let f = t - k as f32;
+            ctrl[k].lerp(ctrl[k + 1], f) + Vec3::new(0.0, 0.04, -0.03)
+        };
+        let spreads = (0..=80).map(|h| h as f32 * 0.5 / 17.0).chain([2.0, 5.0]);
+        let mut xs = Vec::new();
+        for spread in spreads {
+            for start in [0.2, 3.7, 20.3] {
+                let group: Vec<Vec3> = (0..LANES)
+                    .map(|j| near(start + spread * j as f32 / (LANES - 1) as f32))
+                    .collect();
+                xs.extend_from_slice(&group);
+                let mut with_nan = group;
+                with_nan[5] = Vec3::NAN;
+                xs.extend(with_nan);
+            }
+        }
+        // And a last group that is not a whole one.
+        xs.extend((0..7).map(|j| near(2.0 + 4.0 * j as f32)));
+        for basis in [
+            CurveBasis::BSpline { degree: 1 },
+            CurveBasis::BSpline { degree: 3 },
+        ] {
+            check(basis, &ctrl, &xs).unwrap();
+        }
+    }
+
     /// The lane weights give every closest point the bits of [`CurvePieces::weights`], the
     /// curve's end included.
     #[test]

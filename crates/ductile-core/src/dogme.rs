@@ -234,8 +234,15 @@ impl Profile {
 }
 
 /// [`Profile::unscaled`] of degree `d ∈ [1, MAX_DEGREE]`: in span `j = ⌊x⌋` the non-zero
-/// functions of level `p` are `U_{j−p+r,p}`, `r = 0..=p`, kept as `n[r]`.
+/// functions of level `p` are `U_{j−p+r,p}`, `r = 0..=p`, kept as `n[r]`. Only for
+/// `0 ≤ x ≤ d + 1` (what [`Profile::eval`] passes): outside the support the span's
+/// polynomial is not zero (`x^d` below 0).
 fn unscaled_any(d: usize, x: f32) -> f32 {
+    debug_assert!(
+        (0.0..=(d + 1) as f32).contains(&x),
+        "x = {x} outside [0, {}]",
+        d + 1
+    );
     // `x ≥ 0` here; the cast saturates, and `x = d + 1` falls in the last span.
     let j = (x as usize).min(d);
     let mut n = [0.0_f32; MAX_DEGREE + 1];
@@ -264,6 +271,7 @@ fn unscaled_any(d: usize, x: f32) -> f32 {
 /// the profile used before).
 #[inline]
 fn unscaled_cubic(x: f32) -> f32 {
+    debug_assert!((0.0..=4.0).contains(&x), "x = {x} outside [0, 4]");
     let j = (x as usize).min(3);
     // `i` of step `(p, r)` is `j + r − p`: `jr(r)` is `j + r` as `f32`, less `p` below.
     let jr = |k: usize| (j + k) as f32;
