@@ -11,7 +11,6 @@
 //! Vertices outside the mask keep their input bits. The rest mesh is never modified.
 //! [`LayerBinding`] is the unit a cache keeps between evaluations.
 
-use std::borrow::Cow;
 use std::sync::Arc;
 
 use glam::Vec3;
@@ -206,8 +205,8 @@ impl LayerBinding {
         let Some(bind) = &self.bind else {
             return Ok(());
         };
-        let out = self.deform(layer, bind, positions, false, scratch)?;
-        self.blend(layer, &out.out, positions);
+        let (out, _) = self.deform(layer, bind, positions, false, scratch)?;
+        self.blend(layer, out, positions);
         Ok(())
     }
 
@@ -224,8 +223,8 @@ impl LayerBinding {
         self.apply_refining_with(layer, positions, &mut Vec::new())
     }
 
-    /// [`LayerBinding::apply_refining`], with a per-vertex tool's outputs written to
-    /// `scratch`, as in [`LayerBinding::apply_with`].
+    /// [`LayerBinding::apply_refining`], with the tool's outputs in `scratch`, as in
+    /// [`LayerBinding::apply_with`] (a whole-layer tool's own array takes its place).
     pub fn apply_refining_with(
         &self,
         layer: &Layer,
@@ -235,9 +234,9 @@ impl LayerBinding {
         let Some(bind) = &self.bind else {
             return Ok(None);
         };
-        let result = self.deform(layer, bind, positions, true, scratch)?;
-        let Some(refinement) = result.refinement else {
-            self.blend(layer, &result.out, positions);
+        let (out, refinement) = self.deform(layer, bind, positions, true, scratch)?;
+        let Some(refinement) = refinement else {
+            self.blend(layer, out, positions);
             return Ok(None);
         };
         let mut input = positions.clone();
@@ -245,7 +244,7 @@ impl LayerBinding {
         for (&i, &w) in self.mask.indices.iter().zip(&self.mask.weights) {
             weights[i as usize] = w;
         }
-        self.blend(layer, &result.out, positions);
+        self.blend(layer, out, positions);
         for (e, &d) in refinement.splits.iter().zip(&refinement.deformed) {
             let p = e.lerp(&input);
             let w = e.lerp(&weights);
@@ -292,9 +291,10 @@ impl LayerBinding {
         Ok(true)
     }
 
-    /// The tool's output for every active vertex, checked to be finite: whole-layer tools
-    /// in one call, the others in (parallel) chunks written to the first `active.len()`
-    /// values of `scratch` (grown with zeros when shorter).
+    /// The tool's output for every active vertex, checked to be finite, in the first
+    /// `active.len()` values of `scratch`, and a whole-layer tool's refinement. A per-vertex
+    /// tool writes them in (parallel) chunks, the buffer grown with zeros when shorter; a
+    /// whole-layer tool's own array takes the buffer's place.
     fn deform<'s>(
         &self,
         layer: &Layer,
@@ -302,45 +302,41 @@ impl LayerBinding {
         positions: &[Vec3],
         refine: bool,
         scratch: &'s mut Vec<Vec3>,
-    ) -> Result<Deformation<'s>> {
+    ) -> Result<(&'s [Vec3], Option<LayerRefinement>)> {
         let active = &self.mask.indices;
-        let (result, bad) = match layer.tool.deform_whole(bind, positions, refine) {
+        let (refinement, bad) = match layer.tool.deform_whole(bind, positions, refine) {
             Some(r) => {
                 let r = r?;
+                if r.out.len() != active.len() {
+                    return Err(CoreError::Degenerate {
+                        what: format!("layer '{}'", layer.name),
+                        problem: format!(
+                            "the tool returned {} positions for {} active vertices (stale \
+                             bind?)",
+                            r.out.len(),
+                            active.len()
+                        ),
+                    });
+                }
                 let bad = first_non_finite(&r.out);
-                let r = Deformation {
-                    out: Cow::Owned(r.out),
-                    refinement: r.refinement,
-                };
-                (r, bad)
+                *scratch = r.out;
+                (r.refinement, bad)
             }
             None => {
                 if scratch.len() < active.len() {
                     *scratch = zeroed(active.len());
                 }
                 let out = &mut scratch[..active.len()];
-                let bad = deform_chunks(&layer.tool, bind, positions, active, out);
-                let r = Deformation {
-                    out: Cow::Borrowed(out),
-                    refinement: None,
-                };
-                (r, bad)
+                (
+                    None,
+                    deform_chunks(&layer.tool, bind, positions, active, out),
+                )
             }
         };
-        if result.out.len() != active.len() {
-            return Err(CoreError::Degenerate {
-                what: format!("layer '{}'", layer.name),
-                problem: format!(
-                    "the tool returned {} positions for {} active vertices (stale bind?)",
-                    result.out.len(),
-                    active.len()
-                ),
-            });
-        }
         if let Some(k) = bad {
             return Err(non_finite(layer, active[k]));
         }
-        Ok(result)
+        Ok((&scratch[..active.len()], refinement))
     }
 
     /// `p'ᵢ = pᵢ + weight · wᵢ · (D(pᵢ) − pᵢ)` over the active vertices, exactly `D(pᵢ)` when
@@ -399,13 +395,6 @@ fn deform_chunks(
         tool.deform(bind, positions, active, out);
         first_non_finite(out)
     }
-}
-
-/// A layer's tool outputs, in mask order: a whole-layer tool's own (with its refinement),
-/// or a per-vertex tool's in the evaluation's scratch buffer.
-struct Deformation<'s> {
-    out: Cow<'s, [Vec3]>,
-    refinement: Option<LayerRefinement>,
 }
 
 /// What [`LayerBinding::apply_recorded`] returns.
