@@ -270,7 +270,7 @@ fn eval_net(net: &[Vec3], n_u: usize, pu: usize, pv: usize, b: &Bases) -> [Vec3;
 }
 
 /// The non-zero basis values and derivatives at one `(u, v)`, borrowed: from a [`Bases`] or
-/// from the ones a [`SurfaceBind`] keeps per bound point.
+/// from those of a [`SurfaceBind`]'s bound point.
 #[derive(Debug, Clone, Copy)]
 struct Weights<'a> {
     nu: &'a [f32],
@@ -349,9 +349,9 @@ struct RestFrame {
 
 /// The rest frames of a bind's points: one for all of them where the rest surface is its
 /// frame's plane (normal `U × V / |U × V|`, derivatives `U` and `V` everywhere), else one
-/// per point. The plane's frame, kept once instead of in every point, takes 36 of the 120
-/// bytes per bound point off a bicubic bind (the Add menu's surfaces are planar at rest)
-/// that the bind writes and deform reads.
+/// per point. The plane's frame, kept once instead of in every point, takes 36 bytes per
+/// bound point (of 56 with evaluated bases) off a bind of the Add menu's surfaces, planar at
+/// rest, that the bind writes and deform reads.
 #[derive(Debug, Clone)]
 enum RestFrames {
     /// Every point's frame.
@@ -359,6 +359,21 @@ enum RestFrames {
     /// Per bound point, in the order of `SurfaceBind::points`; empty for a plane without a
     /// normal, where no point projects and no frame is read.
     PerPoint(Vec<RestFrame>),
+}
+
+/// Where a [`SurfaceBind`]'s points get their basis values and derivatives at `(u₁, u₂)`:
+/// `Nᵤ, N'ᵤ` (`p_u + 1` each) then `Nᵥ, N'ᵥ` (`p_v + 1` each), as [`piece_bases_into`]
+/// writes them.
+#[derive(Debug, Clone)]
+enum BoundBases {
+    /// Evaluated again per point by deform, from the power-form pieces of both directions
+    /// (degrees up to 3, the Add menu's bicubic surfaces): one vector's Horner steps per
+    /// direction, the same call as the bind's and so the same bits. Reading them from memory
+    /// instead (64 bytes per bicubic point) cost more than this (2026-11-29).
+    Pieces(Box<[Option<BasisPieces>; 2]>),
+    /// Kept per bound point, `2(p_u + 1) + 2(p_v + 1)` values each (higher degrees, or a
+    /// knot vector too long for a piece table, where evaluating costs divisions).
+    Kept(Vec<f32>),
 }
 
 /// Slot of an active vertex that does not project onto the surface (it stays where it is).
@@ -375,10 +390,8 @@ pub struct SurfaceBind {
     points: Vec<Bound>,
     /// The rest frame of each bound point.
     frames: RestFrames,
-    /// Per bound point, the basis values and derivatives at its `(u₁, u₂)`:
-    /// `Nᵤ, N'ᵤ` (`p_u + 1` each) then `Nᵥ, N'ᵥ` (`p_v + 1` each). Deform reads them instead
-    /// of evaluating the bases again (their divisions were most of its time).
-    weights: Vec<f32>,
+    /// Where deform gets each bound point's basis values and derivatives.
+    bases: BoundBases,
     /// The rest net the bind was made on.
     rest: Vec<Vec3>,
 }
@@ -389,22 +402,35 @@ impl Slotted for SurfaceBind {
     }
 }
 
+/// The basis values and derivatives of one bound point, borrowed from `w` (laid out as
+/// [`piece_bases_into`] writes them), with its first non-zero functions `span`.
+fn weights_in(w: &[f32], (pu, pv): (usize, usize), span: (u32, u32)) -> Weights<'_> {
+    let (nu, w) = w.split_at(pu + 1);
+    let (du, w) = w.split_at(pu + 1);
+    let (nv, dv) = w.split_at(pv + 1);
+    Weights {
+        nu,
+        du,
+        nv,
+        dv: &dv[..=pv],
+        su: span.0 as usize,
+        sv: span.1 as usize,
+    }
+}
+
 impl SurfaceBind {
-    /// The cached basis weights of bound point `k`.
-    fn weights_of(&self, k: usize, b: &Bound) -> Weights<'_> {
-        let (pu, pv) = (self.knots[0].degree(), self.knots[1].degree());
-        let stride = 2 * (pu + 1) + 2 * (pv + 1);
-        let w = &self.weights[k * stride..(k + 1) * stride];
-        let (nu, w) = w.split_at(pu + 1);
-        let (du, w) = w.split_at(pu + 1);
-        let (nv, dv) = w.split_at(pv + 1);
-        Weights {
-            nu,
-            du,
-            nv,
-            dv,
-            su: b.span.0 as usize,
-            sv: b.span.1 as usize,
+    /// The basis values and derivatives of bound point `k`, `b`: read from the bind, or
+    /// evaluated into `scratch` (at least `2(p_u + 1) + 2(p_v + 1)` long).
+    fn weights_of<'a>(&'a self, k: usize, b: &Bound, scratch: &'a mut [f32]) -> Weights<'a> {
+        let degrees = (self.knots[0].degree(), self.knots[1].degree());
+        let stride = 2 * (degrees.0 + 1) + 2 * (degrees.1 + 1);
+        match &self.bases {
+            BoundBases::Pieces(pieces) => {
+                let out = &mut scratch[..stride];
+                piece_bases_into(pieces, &self.knots, b.uv.0, b.uv.1, out);
+                weights_in(out, degrees, b.span)
+            }
+            BoundBases::Kept(w) => weights_in(&w[k * stride..(k + 1) * stride], degrees, b.span),
         }
     }
 }
@@ -497,11 +523,23 @@ impl ShapeSurfaceTool {
         } else {
             None
         };
-        // The bases kept per bound point, in power-form pieces (no knot search or division).
+        // The bases at each bound point, from power-form pieces (no knot search or
+        // division): evaluated again by deform for degrees up to 3, else kept per point.
         let pieces = [BasisPieces::new(&knots[0]), BasisPieces::new(&knots[1])];
-        // The bound point at `(u, v, u₃)`, its basis values written to `weights`.
+        let evaluated = pu <= 3 && pv <= 3 && pieces.iter().all(Option::is_some);
+        let full_stride = 2 * (pu + 1) + 2 * (pv + 1);
+        // The values kept per bound point (none where deform evaluates them).
+        let stride = if evaluated { 0 } else { full_stride };
+        // The bound point at `(u, v, u₃)`, its basis values written to `weights` (`stride`
+        // long: empty where deform evaluates them).
         let bound = |(u, v, u3): (f32, f32, f32), weights: &mut [f32]| {
-            let (first_u, first_v) = piece_bases_into(&pieces, &knots, u, v, weights);
+            let mut scratch = [0.0; 4 * (MAX_DEGREE + 1)];
+            let out = if weights.is_empty() {
+                &mut scratch[..full_stride]
+            } else {
+                weights
+            };
+            let (first_u, first_v) = piece_bases_into(&pieces, &knots, u, v, out);
             Bound {
                 uv: (u, v),
                 u3,
@@ -535,7 +573,6 @@ impl ShapeSurfaceTool {
         // does not project keeps an unused slot and is marked unbound after.
         let (mut slot, active) = bind_slots(input.positions.len(), input.active);
         let m = active.len();
-        let stride = 2 * (pu + 1) + 2 * (pv + 1);
         // The plane's one frame (a plane without a normal has none, and no point projects),
         // or a frame per point on a curved rest surface.
         let shared = plane.as_ref().and_then(|p| {
@@ -548,7 +585,7 @@ impl ShapeSurfaceTool {
         let per_point = plane.is_none();
         let mut points: Vec<Bound> = zeroed(m);
         let mut frames: Vec<RestFrame> = if per_point { zeroed(m) } else { Vec::new() };
-        let mut weights = zeroed(m * stride);
+        let mut weights: Vec<f32> = zeroed(m * stride);
         let mut projects = zeroed(m);
         // The same knots and the same kind of frames (the plane's, the same one), as a bind
         // of the same rest state has.
@@ -565,9 +602,15 @@ impl ShapeSurfaceTool {
         } else {
             (0..m.div_ceil(BIND_CHUNK)).map(|_| None).collect()
         };
+        // Per chunk, its part of `weights` (empty where deform evaluates them).
+        let weight_parts: Vec<&mut [f32]> = if evaluated {
+            (0..m.div_ceil(BIND_CHUNK)).map(|_| &mut [][..]).collect()
+        } else {
+            weights.chunks_mut(BIND_CHUNK * stride).collect()
+        };
         points
             .par_chunks_mut(BIND_CHUNK)
-            .zip(weights.par_chunks_mut(BIND_CHUNK * stride))
+            .zip(weight_parts)
             .zip(projects.par_chunks_mut(BIND_CHUNK))
             .zip(frame_parts)
             .zip(active.par_chunks(BIND_CHUNK))
@@ -577,8 +620,10 @@ impl ShapeSurfaceTool {
                         if s != UNPROJECTED as usize {
                             points[j] = old.points[s];
                             projects[j] = true;
-                            weights[j * stride..(j + 1) * stride]
-                                .copy_from_slice(&old.weights[s * stride..(s + 1) * stride]);
+                            if let BoundBases::Kept(old) = &old.bases {
+                                weights[j * stride..(j + 1) * stride]
+                                    .copy_from_slice(&old[s * stride..(s + 1) * stride]);
+                            }
                             if let (Some(f), RestFrames::PerPoint(old)) =
                                 (frames.as_deref_mut(), &old.frames)
                             {
@@ -622,12 +667,17 @@ impl ShapeSurfaceTool {
             Some(f) => RestFrames::Plane(f),
             None => RestFrames::PerPoint(frames),
         };
+        let bases = if evaluated {
+            BoundBases::Pieces(Box::new(pieces))
+        } else {
+            BoundBases::Kept(weights)
+        };
         Ok(SurfaceBind {
             knots,
             slot,
             points,
             frames,
-            weights,
+            bases,
             rest,
         })
     }
@@ -711,6 +761,7 @@ impl Deformer for ShapeSurfaceTool {
             .map(|(k, d)| (k % n_u, k / n_u, *d))
             .collect();
         let sparse = 2 * moved_entries.len() < (pu + 1) * (pv + 1);
+        let mut scratch = [0.0; 4 * (MAX_DEGREE + 1)];
         for (o, &i) in out.iter_mut().zip(active) {
             let x = positions[i as usize];
             let Some((k, b)) = bind
@@ -721,7 +772,7 @@ impl Deformer for ShapeSurfaceTool {
                 *o = x;
                 continue;
             };
-            let bs = bind.weights_of(k, b);
+            let bs = bind.weights_of(k, b, &mut scratch);
             let frame = match &bind.frames {
                 RestFrames::Plane(f) => f,
                 RestFrames::PerPoint(f) => &f[k],
@@ -890,6 +941,117 @@ mod tests {
             // D = S' + 2·u₃·N: x, y shift by (0.1, 0), z = 0.3 + 2 z.
             let e = Vec3::new(p.x + 0.1, p.y, 0.3 + 2.0 * p.z);
             assert!((*q - e).length() < 1e-5, "{p}: {q} vs {e}");
+        }
+    }
+
+    /// `bind` with every point's basis values kept, as a bind of a higher degree keeps them.
+    fn with_kept_bases(bind: &SurfaceBind) -> SurfaceBind {
+        let BoundBases::Pieces(pieces) = &bind.bases else {
+            panic!("a bind of degrees up to 3 evaluates its bases");
+        };
+        let (pu, pv) = (bind.knots[0].degree(), bind.knots[1].degree());
+        let stride = 2 * (pu + 1) + 2 * (pv + 1);
+        let mut kept = vec![0.0; bind.points.len() * stride];
+        for (b, w) in bind.points.iter().zip(kept.chunks_exact_mut(stride)) {
+            let (su, sv) = piece_bases_into(pieces, &bind.knots, b.uv.0, b.uv.1, w);
+            assert_eq!((su as u32, sv as u32), b.span);
+        }
+        SurfaceBind {
+            bases: BoundBases::Kept(kept),
+            ..bind.clone()
+        }
+    }
+
+    #[test]
+    fn evaluated_bases_deform_as_kept_ones() {
+        // Degrees up to 3 evaluate each point's bases in deform instead of keeping them: the
+        // same bits as the kept values, for every degree pair and for planar and curved rest
+        // surfaces, dense and sparse moves, with and without heights; and a rebind that
+        // copies every entry of an earlier bind that kept them evaluates them again.
+        let pts = slab();
+        let active: Vec<u32> = (0..pts.len() as u32).collect();
+        let topology = Topology {
+            weld: Vec::new(),
+            representative: Vec::new(),
+            triangles: Vec::new(),
+        };
+        let input = BindInput {
+            positions: &pts,
+            topology: &topology,
+            active: &active,
+        };
+        for degree in [(1, 1), (2, 3), (3, 1), (3, 3)] {
+            for (curved, dense) in [(false, false), (false, true), (true, false), (true, true)] {
+                let mut tool = ShapeSurfaceTool {
+                    degree,
+                    ..ShapeSurfaceTool::planar(frame(), (6, 5))
+                };
+                if curved {
+                    tool.rest.push(SurfaceEdit {
+                        at: (2, 2),
+                        offset: Vec3::new(0.0, 0.0, 0.15),
+                    });
+                }
+                let moved: &[(u32, u32)] = if dense {
+                    &[
+                        (0, 0),
+                        (1, 1),
+                        (2, 1),
+                        (3, 2),
+                        (4, 3),
+                        (5, 4),
+                        (2, 3),
+                        (1, 4),
+                    ]
+                } else {
+                    &[(3, 2)]
+                };
+                for (k, &at) in moved.iter().enumerate() {
+                    tool.moves.push(SurfaceEdit {
+                        at,
+                        offset: Vec3::new(0.05 * k as f32, -0.1, 0.3),
+                    });
+                }
+                if dense {
+                    tool.heights.push(HeightEdit {
+                        at: (2, 2),
+                        height: 1.7,
+                    });
+                }
+                let (out, bind) = apply(&tool, &pts);
+                let kept = with_kept_bases(&bind);
+                let mut out_kept = vec![Vec3::ZERO; pts.len()];
+                tool.deform(&kept, &pts, &active, &mut out_kept);
+                let bits = |v: &[Vec3]| {
+                    v.iter()
+                        .map(|p| p.to_array().map(f32::to_bits))
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(
+                    bits(&out),
+                    bits(&out_kept),
+                    "{degree:?} curved {curved} dense {dense}"
+                );
+                assert!(out != pts, "the moves move the slab");
+                let stale = vec![false; pts.len()];
+                let reused = tool
+                    .bind_reusing(
+                        &input,
+                        Some(Reuse {
+                            bind: &kept,
+                            stale: &stale,
+                        }),
+                    )
+                    .unwrap();
+                assert!(matches!(reused.bases, BoundBases::Pieces(_)));
+                let mut out_reused = vec![Vec3::ZERO; pts.len()];
+                tool.deform(&reused, &pts, &active, &mut out_reused);
+                assert_eq!(
+                    bits(&out),
+                    bits(&out_reused),
+                    "{degree:?} curved {curved} dense {dense}"
+                );
+            }
         }
     }
 
