@@ -5,6 +5,10 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use ductile_cli::suite::{Case, Fixtures};
 
+/// The allocator of the `ductile` binary, as `ductile bench --suite` runs with it.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn suite(c: &mut Criterion) {
     let mut fixtures = Fixtures::default();
     let mut group = c.benchmark_group("suite");

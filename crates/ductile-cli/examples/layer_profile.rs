@@ -19,6 +19,10 @@ use ductile_core::influence::{ChunkBounds, Mask};
 use ductile_core::mesh::RestMesh;
 use ductile_core::stack::{LayerBinding, Stack};
 
+/// The allocator of the `ductile` binary, whose figures this explains.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() -> anyhow::Result<()> {
     let number = |k: usize, default: usize, what: &str| -> anyhow::Result<usize> {
         match std::env::args().nth(k) {

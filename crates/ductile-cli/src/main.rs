@@ -2,6 +2,16 @@
 
 use std::process::ExitCode;
 
+/// mimalloc instead of the system allocator. An evaluation of a large mesh allocates and
+/// frees arrays of megabytes per layer; glibc's malloc serves those above its (moving) mmap
+/// threshold with fresh pages from the kernel every time, so how many page faults an
+/// evaluation takes depended on the sizes of earlier allocations: a change that only made
+/// one bind smaller took `mixed-1m/full-1t` from 74,000 to 268,000 faults and ate its gain.
+/// mimalloc keeps freed memory for reuse: 18,000 faults, and the same bits (docs/performance.md,
+/// 2026-11-29).
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() -> ExitCode {
     let mut stdout = std::io::stdout().lock();
     match ductile_cli::run(std::env::args_os(), &mut stdout) {
