@@ -514,31 +514,65 @@ impl ChunkBounds {
 }
 
 /// The least and greatest of each coordinate of `points`, NaN left out; `+∞` and `−∞` for
-/// no number. Four points (twelve coordinates) at a time in as many running bounds, kept by
-/// `x < lo` and `x > hi` (false for NaN), which compile to vector minimum and maximum.
+/// no number. In [`pulp`]'s runtime dispatch (the same code at each width): `n` points (the
+/// register's lanes) at a time in three registers of running bounds, kept by `x < lo` and
+/// `x > hi` (false for NaN). Read as floats, the points are `x, y, z, x, …`, so lane `j` of
+/// register `r` holds coordinate `(r·n + j) mod 3` throughout. Which of `−0` and `+0` a bound
+/// keeps may depend on the order; the boxes are only compared, where the two are equal.
 fn chunk_box(points: &[Vec3]) -> (Vec3, Vec3) {
-    const W: usize = 12;
-    let coords: &[f32] = bytemuck::cast_slice(points);
-    let mut lo = [f32::INFINITY; W];
-    let mut hi = [f32::NEG_INFINITY; W];
-    let mut groups = coords.chunks_exact(W);
-    for g in &mut groups {
-        for k in 0..W {
-            lo[k] = if g[k] < lo[k] { g[k] } else { lo[k] };
-            hi[k] = if g[k] > hi[k] { g[k] } else { hi[k] };
+    pulp::Arch::new().dispatch(ChunkBox(points))
+}
+
+/// [`chunk_box`] for one dispatched width.
+struct ChunkBox<'a>(&'a [Vec3]);
+
+impl pulp::WithSimd for ChunkBox<'_> {
+    type Output = (Vec3, Vec3);
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, s: S) -> (Vec3, Vec3) {
+        /// The most floats three registers hold (16 lanes each, AVX-512).
+        const MAX: usize = 48;
+        let n = S::F32_LANES;
+        assert!(3 * n <= MAX, "three registers of at most 16 lanes");
+        let coords: &[f32] = bytemuck::cast_slice(self.0);
+        let mut lo = [s.splat_f32s(f32::INFINITY); 3];
+        let mut hi = [s.splat_f32s(f32::NEG_INFINITY); 3];
+        let mut groups = coords.chunks_exact(3 * n);
+        for g in &mut groups {
+            for r in 0..3 {
+                let x: S::f32s =
+                    bytemuck::pod_read_unaligned(bytemuck::cast_slice(&g[r * n..(r + 1) * n]));
+                lo[r] = s.select_f32s(s.less_than_f32s(x, lo[r]), x, lo[r]);
+                hi[r] = s.select_f32s(s.greater_than_f32s(x, hi[r]), x, hi[r]);
+            }
         }
+        // The registers' lanes in order, then the points left over: float `f` of either is
+        // coordinate `f mod 3`.
+        let lanes = |v: &[S::f32s; 3]| {
+            let mut a = [0.0; MAX];
+            for (r, x) in v.iter().enumerate() {
+                a[r * n..(r + 1) * n]
+                    .copy_from_slice(bytemuck::cast_slice(std::slice::from_ref(x)));
+            }
+            a
+        };
+        let (lo_lanes, hi_lanes) = (lanes(&lo), lanes(&hi));
+        let mut lo = [f32::INFINITY; 3];
+        let mut hi = [f32::NEG_INFINITY; 3];
+        let rest = groups.remainder();
+        for (f, (&l, &h)) in lo_lanes[..3 * n]
+            .iter()
+            .zip(&hi_lanes[..3 * n])
+            .chain(rest.iter().zip(rest))
+            .enumerate()
+        {
+            let k = f % 3;
+            lo[k] = if l < lo[k] { l } else { lo[k] };
+            hi[k] = if h > hi[k] { h } else { hi[k] };
+        }
+        (Vec3::from_array(lo), Vec3::from_array(hi))
     }
-    for (k, &x) in groups.remainder().iter().enumerate() {
-        lo[k] = if x < lo[k] { x } else { lo[k] };
-        hi[k] = if x > hi[k] { x } else { hi[k] };
-    }
-    // Coordinate k of the box from the running bounds k, k + 3, k + 6, k + 9.
-    let fold = |b: &[f32; W], pick: fn(f32, f32) -> f32| {
-        Vec3::from_array(std::array::from_fn(|k| {
-            pick(pick(b[k], b[k + 3]), pick(b[k + 6], b[k + 9]))
-        }))
-    };
-    (fold(&lo, f32::min), fold(&hi, f32::max))
 }
 
 /// The vertices a layer acts on and their weights in `(0, 1]`.
@@ -1212,8 +1246,9 @@ pub(crate) mod tests {
 
     #[test]
     fn a_chunk_box_holds_the_least_and_greatest_coordinates_without_nan() {
-        // Every length from none to past three groups of four points, NaN here and there.
-        let points: Vec<Vec3> = (0..17)
+        // Every length from none to past four groups of the widest registers (16 points),
+        // a NaN in one coordinate here and there.
+        let points: Vec<Vec3> = (0..70)
             .map(|k| {
                 let t = k as f32;
                 Vec3::new(
@@ -1224,10 +1259,10 @@ pub(crate) mod tests {
             })
             .collect();
         for n in 0..=points.len() {
-            for nan in [None, Some(0), Some(n / 2)] {
+            for nan in [None, Some(0), Some(n / 2), Some(n.saturating_sub(1))] {
                 let mut p = points[..n].to_vec();
                 if let Some(k) = nan.filter(|&k| k < n) {
-                    p[k].y = f32::NAN;
+                    p[k][k % 3] = f32::NAN;
                 }
                 let mut lo = Vec3::INFINITY;
                 let mut hi = Vec3::NEG_INFINITY;
