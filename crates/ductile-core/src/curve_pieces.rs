@@ -472,6 +472,14 @@ impl BasisPieces {
         }
     }
 
+    /// The index of the first non-zero function at `t` (clamped to `[0, 1]`), as
+    /// [`BasisPieces::values_and_derivatives`] returns it, without the values.
+    #[inline]
+    #[must_use]
+    pub fn first(&self, t: f32) -> usize {
+        self.firsts[self.piece_of(t).0] as usize
+    }
+
     /// For a degree up to 3, [`BasisPieces::values_and_derivatives`] in the lanes of two
     /// vectors (lanes past `p` are 0 for a finite `t`) with the index of the first function;
     /// `None` for a higher degree.

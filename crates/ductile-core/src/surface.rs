@@ -209,6 +209,7 @@ fn piece_bases(pieces: &[Option<BasisPieces>; 2], kv: &[KnotVector; 2], u: f32, 
 /// [`piece_bases`] written to `out` as a bind keeps them, `N_u`, `N_u'`, `N_v`, `N_v'`
 /// (`p_u + 1`, `p_u + 1`, `p_v + 1`, `p_v + 1` values); returns the first non-zero function in
 /// `u` and in `v`.
+#[inline]
 fn piece_bases_into(
     pieces: &[Option<BasisPieces>; 2],
     kv: &[KnotVector; 2],
@@ -527,19 +528,19 @@ impl ShapeSurfaceTool {
         // division): evaluated again by deform for degrees up to 3, else kept per point.
         let pieces = [BasisPieces::new(&knots[0]), BasisPieces::new(&knots[1])];
         let evaluated = pu <= 3 && pv <= 3 && pieces.iter().all(Option::is_some);
-        let full_stride = 2 * (pu + 1) + 2 * (pv + 1);
         // The values kept per bound point (none where deform evaluates them).
-        let stride = if evaluated { 0 } else { full_stride };
+        let stride = if evaluated {
+            0
+        } else {
+            2 * (pu + 1) + 2 * (pv + 1)
+        };
         // The bound point at `(u, v, u₃)`, its basis values written to `weights` (`stride`
         // long: empty where deform evaluates them).
         let bound = |(u, v, u3): (f32, f32, f32), weights: &mut [f32]| {
-            let mut scratch = [0.0; 4 * (MAX_DEGREE + 1)];
-            let out = if weights.is_empty() {
-                &mut scratch[..full_stride]
-            } else {
-                weights
+            let (first_u, first_v) = match &pieces {
+                [Some(a), Some(b)] if evaluated => (a.first(u), b.first(v)),
+                _ => piece_bases_into(&pieces, &knots, u, v, weights),
             };
-            let (first_u, first_v) = piece_bases_into(&pieces, &knots, u, v, out);
             Bound {
                 uv: (u, v),
                 u3,
