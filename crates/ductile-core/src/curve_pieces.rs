@@ -476,7 +476,7 @@ impl BasisPieces {
     /// [`BasisPieces::values_and_derivatives`] returns it, without the values.
     #[inline]
     #[must_use]
-    pub fn first(&self, t: f32) -> usize {
+    pub fn first_at(&self, t: f32) -> usize {
         self.firsts[self.piece_of(t).0] as usize
     }
 

@@ -531,7 +531,7 @@ impl pulp::WithSimd for ChunkBox<'_> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, s: S) -> (Vec3, Vec3) {
-        /// The most floats three registers hold (16 lanes each, AVX-512).
+        /// The most floats three registers hold (16 lanes each, pulp's widest).
         const MAX: usize = 48;
         let n = S::F32_LANES;
         assert!(3 * n <= MAX, "three registers of at most 16 lanes");
@@ -1246,11 +1246,16 @@ pub(crate) mod tests {
 
     #[test]
     fn a_chunk_box_holds_the_least_and_greatest_coordinates_without_nan() {
+        use pulp::WithSimd;
         // Every length from none to past four groups of the widest registers (16 points),
-        // a NaN in one coordinate here and there.
+        // with infinite coordinates at one point, a NaN in one coordinate here and there, or
+        // NaN in every point's z (`usize::MAX`).
         let points: Vec<Vec3> = (0..70)
             .map(|k| {
                 let t = k as f32;
+                if k == 41 {
+                    return Vec3::new(f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY);
+                }
                 Vec3::new(
                     (t * 1.3).sin() * 5.0,
                     (t * 0.7).cos() - t,
@@ -1259,10 +1264,21 @@ pub(crate) mod tests {
             })
             .collect();
         for n in 0..=points.len() {
-            for nan in [None, Some(0), Some(n / 2), Some(n.saturating_sub(1))] {
+            for nan in [
+                None,
+                Some(0),
+                Some(n / 2),
+                Some(n.saturating_sub(1)),
+                Some(usize::MAX),
+            ] {
                 let mut p = points[..n].to_vec();
                 if let Some(k) = nan.filter(|&k| k < n) {
                     p[k][k % 3] = f32::NAN;
+                }
+                if nan == Some(usize::MAX) {
+                    for q in &mut p {
+                        q.z = f32::NAN;
+                    }
                 }
                 let mut lo = Vec3::INFINITY;
                 let mut hi = Vec3::NEG_INFINITY;
@@ -1271,6 +1287,16 @@ pub(crate) mod tests {
                     hi = Vec3::from_array(std::array::from_fn(|i| hi[i].max(q[i])));
                 }
                 assert_eq!(chunk_box(&p), (lo, hi), "{n} points, NaN at {nan:?}");
+                // Every register width, whatever this CPU dispatches to: 1, 4, 8, 16 lanes.
+                let widths = [
+                    ChunkBox(&p).with_simd(pulp::Scalar::new()),
+                    ChunkBox(&p).with_simd(pulp::Scalar128b),
+                    ChunkBox(&p).with_simd(pulp::Scalar256b),
+                    ChunkBox(&p).with_simd(pulp::Scalar512b),
+                ];
+                for (w, b) in widths.into_iter().enumerate() {
+                    assert_eq!(b, (lo, hi), "{n} points, NaN at {nan:?}, width {w}");
+                }
             }
         }
     }

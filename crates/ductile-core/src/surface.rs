@@ -372,8 +372,9 @@ enum BoundBases {
     /// direction, the same call as the bind's and so the same bits. Reading them from memory
     /// instead (64 bytes per bicubic point) cost more than this (2026-11-29).
     Pieces(Box<[Option<BasisPieces>; 2]>),
-    /// Kept per bound point, `2(p_u + 1) + 2(p_v + 1)` values each (higher degrees, or a
-    /// knot vector too long for a piece table, where evaluating costs divisions).
+    /// Kept per bound point, `2(p_u + 1) + 2(p_v + 1)` values each: degrees above 3 (Horner's
+    /// rule per function, not in one vector), or a knot vector too long for a piece table
+    /// (the recurrence, with divisions).
     Kept(Vec<f32>),
 }
 
@@ -538,7 +539,7 @@ impl ShapeSurfaceTool {
         // long: empty where deform evaluates them).
         let bound = |(u, v, u3): (f32, f32, f32), weights: &mut [f32]| {
             let (first_u, first_v) = match &pieces {
-                [Some(a), Some(b)] if evaluated => (a.first(u), b.first(v)),
+                [Some(a), Some(b)] if evaluated => (a.first_at(u), b.first_at(v)),
                 _ => piece_bases_into(&pieces, &knots, u, v, weights),
             };
             Bound {
@@ -1054,6 +1055,82 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn higher_degrees_keep_their_bases_and_reuse_them() {
+        // Degrees (4, 2): the bind keeps every point's basis values. Moving every control
+        // point by one offset translates the slab by it (the values sum to 1 and the
+        // derivatives to 0, so the normal stays), and a rebind that copies the entries of the
+        // vertices that did not move from the earlier bind deforms with the fresh bind's bits.
+        let mut tool = ShapeSurfaceTool {
+            degree: (4, 2),
+            ..ShapeSurfaceTool::planar(frame(), (6, 5))
+        };
+        tool.rest.push(SurfaceEdit {
+            at: (2, 2),
+            offset: Vec3::new(0.0, 0.0, 0.1),
+        });
+        for i in 0..6 {
+            for j in 0..5 {
+                tool.moves.push(SurfaceEdit {
+                    at: (i, j),
+                    offset: Vec3::new(0.1, -0.05, 0.2),
+                });
+            }
+        }
+        let mut pts = slab();
+        let (out, bind) = apply(&tool, &pts);
+        assert!(matches!(bind.bases, BoundBases::Kept(_)));
+        let mut bound = 0;
+        for (p, q) in pts.iter().zip(&out) {
+            if q != p {
+                bound += 1;
+                let e = *p + Vec3::new(0.1, -0.05, 0.2);
+                assert!((*q - e).length() < 1e-5, "{p}: {q} vs {e}");
+            }
+        }
+        assert!(
+            bound > pts.len() / 2,
+            "{bound} of {} points move",
+            pts.len()
+        );
+        // Move every third point a little and bind again, reusing the rest.
+        let mut stale = vec![false; pts.len()];
+        for (k, p) in pts.iter_mut().enumerate().step_by(3) {
+            p.z += 0.01;
+            stale[k] = true;
+        }
+        let active: Vec<u32> = (0..pts.len() as u32).collect();
+        let topology = Topology {
+            weld: Vec::new(),
+            representative: Vec::new(),
+            triangles: Vec::new(),
+        };
+        let input = BindInput {
+            positions: &pts,
+            topology: &topology,
+            active: &active,
+        };
+        let fresh = tool.bind(&input).unwrap();
+        let reused = tool
+            .bind_reusing(
+                &input,
+                Some(Reuse {
+                    bind: &bind,
+                    stale: &stale,
+                }),
+            )
+            .unwrap();
+        let (mut a, mut b) = (vec![Vec3::ZERO; pts.len()], vec![Vec3::ZERO; pts.len()]);
+        tool.deform(&fresh, &pts, &active, &mut a);
+        tool.deform(&reused, &pts, &active, &mut b);
+        let bits = |v: &[Vec3]| {
+            v.iter()
+                .map(|p| p.to_array().map(f32::to_bits))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(bits(&a), bits(&b));
     }
 
     #[test]
