@@ -888,24 +888,43 @@ mod tests {
         v
     }
 
-    fn apply(tool: &ShapeSurfaceTool, pts: &[Vec3]) -> (Vec<Vec3>, SurfaceBind) {
-        tool.validate("t").unwrap();
-        let t = Topology {
+    /// `tool` bound on every point of `pts` (no topology), reusing `previous` where given.
+    fn bind_all(
+        tool: &ShapeSurfaceTool,
+        pts: &[Vec3],
+        previous: Option<Reuse<'_, SurfaceBind>>,
+    ) -> SurfaceBind {
+        let topology = Topology {
             weld: Vec::new(),
             representative: Vec::new(),
             triangles: Vec::new(),
         };
         let active: Vec<u32> = (0..pts.len() as u32).collect();
-        let bind = tool
-            .bind(&BindInput {
-                positions: pts,
-                topology: &t,
-                active: &active,
-            })
-            .unwrap();
+        let input = BindInput {
+            positions: pts,
+            topology: &topology,
+            active: &active,
+        };
+        tool.bind_reusing(&input, previous).unwrap()
+    }
+
+    /// Every point of `pts` deformed by `tool` through `bind`.
+    fn deform_all(tool: &ShapeSurfaceTool, bind: &SurfaceBind, pts: &[Vec3]) -> Vec<Vec3> {
+        let active: Vec<u32> = (0..pts.len() as u32).collect();
         let mut out = vec![Vec3::ZERO; pts.len()];
-        tool.deform(&bind, pts, &active, &mut out);
-        (out, bind)
+        tool.deform(bind, pts, &active, &mut out);
+        out
+    }
+
+    /// The bits of every coordinate, for comparisons where `-0 != 0` and NaN equals itself.
+    fn bits(v: &[Vec3]) -> Vec<[u32; 3]> {
+        v.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
+    }
+
+    fn apply(tool: &ShapeSurfaceTool, pts: &[Vec3]) -> (Vec<Vec3>, SurfaceBind) {
+        tool.validate("t").unwrap();
+        let bind = bind_all(tool, pts, None);
+        (deform_all(tool, &bind, pts), bind)
     }
 
     #[test]
@@ -971,17 +990,6 @@ mod tests {
         // surfaces, dense and sparse moves, with and without heights; and a rebind that
         // copies every entry of an earlier bind that kept them evaluates them again.
         let pts = slab();
-        let active: Vec<u32> = (0..pts.len() as u32).collect();
-        let topology = Topology {
-            weld: Vec::new(),
-            representative: Vec::new(),
-            triangles: Vec::new(),
-        };
-        let input = BindInput {
-            positions: &pts,
-            topology: &topology,
-            active: &active,
-        };
         for degree in [(1, 1), (2, 3), (3, 1), (3, 3)] {
             for (curved, dense) in [(false, false), (false, true), (true, false), (true, true)] {
                 let mut tool = ShapeSurfaceTool {
@@ -1022,13 +1030,7 @@ mod tests {
                 }
                 let (out, bind) = apply(&tool, &pts);
                 let kept = with_kept_bases(&bind);
-                let mut out_kept = vec![Vec3::ZERO; pts.len()];
-                tool.deform(&kept, &pts, &active, &mut out_kept);
-                let bits = |v: &[Vec3]| {
-                    v.iter()
-                        .map(|p| p.to_array().map(f32::to_bits))
-                        .collect::<Vec<_>>()
-                };
+                let out_kept = deform_all(&tool, &kept, &pts);
                 assert_eq!(
                     bits(&out),
                     bits(&out_kept),
@@ -1036,21 +1038,15 @@ mod tests {
                 );
                 assert!(out != pts, "the moves move the slab");
                 let stale = vec![false; pts.len()];
-                let reused = tool
-                    .bind_reusing(
-                        &input,
-                        Some(Reuse {
-                            bind: &kept,
-                            stale: &stale,
-                        }),
-                    )
-                    .unwrap();
+                let previous = Reuse {
+                    bind: &kept,
+                    stale: &stale,
+                };
+                let reused = bind_all(&tool, &pts, Some(previous));
                 assert!(matches!(reused.bases, BoundBases::Pieces(_)));
-                let mut out_reused = vec![Vec3::ZERO; pts.len()];
-                tool.deform(&reused, &pts, &active, &mut out_reused);
                 assert_eq!(
                     bits(&out),
-                    bits(&out_reused),
+                    bits(&deform_all(&tool, &reused, &pts)),
                     "{degree:?} curved {curved} dense {dense}"
                 );
             }
@@ -1101,36 +1097,16 @@ mod tests {
             p.z += 0.01;
             stale[k] = true;
         }
-        let active: Vec<u32> = (0..pts.len() as u32).collect();
-        let topology = Topology {
-            weld: Vec::new(),
-            representative: Vec::new(),
-            triangles: Vec::new(),
+        let previous = Reuse {
+            bind: &bind,
+            stale: &stale,
         };
-        let input = BindInput {
-            positions: &pts,
-            topology: &topology,
-            active: &active,
-        };
-        let fresh = tool.bind(&input).unwrap();
-        let reused = tool
-            .bind_reusing(
-                &input,
-                Some(Reuse {
-                    bind: &bind,
-                    stale: &stale,
-                }),
-            )
-            .unwrap();
-        let (mut a, mut b) = (vec![Vec3::ZERO; pts.len()], vec![Vec3::ZERO; pts.len()]);
-        tool.deform(&fresh, &pts, &active, &mut a);
-        tool.deform(&reused, &pts, &active, &mut b);
-        let bits = |v: &[Vec3]| {
-            v.iter()
-                .map(|p| p.to_array().map(f32::to_bits))
-                .collect::<Vec<_>>()
-        };
-        assert_eq!(bits(&a), bits(&b));
+        let fresh = bind_all(&tool, &pts, None);
+        let reused = bind_all(&tool, &pts, Some(previous));
+        assert_eq!(
+            bits(&deform_all(&tool, &fresh, &pts)),
+            bits(&deform_all(&tool, &reused, &pts))
+        );
     }
 
     #[test]
