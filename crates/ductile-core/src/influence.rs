@@ -531,10 +531,7 @@ impl pulp::WithSimd for ChunkBox<'_> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, s: S) -> (Vec3, Vec3) {
-        /// The most floats three registers hold (16 lanes each, pulp's widest).
-        const MAX: usize = 48;
         let n = S::F32_LANES;
-        assert!(3 * n <= MAX, "three registers of at most 16 lanes");
         let coords: &[f32] = bytemuck::cast_slice(self.0);
         let mut lo = [s.splat_f32s(f32::INFINITY); 3];
         let mut hi = [s.splat_f32s(f32::NEG_INFINITY); 3];
@@ -549,21 +546,14 @@ impl pulp::WithSimd for ChunkBox<'_> {
         }
         // The registers' lanes in order, then the points left over: float `f` of either is
         // coordinate `f mod 3`.
-        let lanes = |v: &[S::f32s; 3]| {
-            let mut a = [0.0; MAX];
-            for (r, x) in v.iter().enumerate() {
-                a[r * n..(r + 1) * n]
-                    .copy_from_slice(bytemuck::cast_slice(std::slice::from_ref(x)));
-            }
-            a
-        };
-        let (lo_lanes, hi_lanes) = (lanes(&lo), lanes(&hi));
+        let lo_lanes: &[f32] = bytemuck::cast_slice(&lo);
+        let hi_lanes: &[f32] = bytemuck::cast_slice(&hi);
         let mut lo = [f32::INFINITY; 3];
         let mut hi = [f32::NEG_INFINITY; 3];
         let rest = groups.remainder();
-        for (f, (&l, &h)) in lo_lanes[..3 * n]
+        for (f, (&l, &h)) in lo_lanes
             .iter()
-            .zip(&hi_lanes[..3 * n])
+            .zip(hi_lanes)
             .chain(rest.iter().zip(rest))
             .enumerate()
         {
