@@ -485,6 +485,17 @@ impl ChunkBounds {
         }
     }
 
+    /// Flags the chunks that hold any of the vertices `span` as stale.
+    pub fn mark_span(&mut self, span: std::ops::Range<usize>) {
+        if span.is_empty() {
+            return;
+        }
+        let end = span.end.div_ceil(CHUNK).min(self.stale.len());
+        for stale in self.stale.iter_mut().take(end).skip(span.start / CHUNK) {
+            *stale = true;
+        }
+    }
+
     /// Computes the boxes of the stale chunks again from `positions`, or every box when
     /// their number changed.
     pub fn refresh(&mut self, positions: &[Vec3]) {
@@ -519,7 +530,7 @@ impl ChunkBounds {
 /// `x > hi` (false for NaN). Read as floats, the points are `x, y, z, x, …`, so lane `j` of
 /// register `r` holds coordinate `(r·n + j) mod 3` throughout. Which of `−0` and `+0` a bound
 /// keeps may depend on the order; the boxes are only compared, where the two are equal.
-fn chunk_box(points: &[Vec3]) -> (Vec3, Vec3) {
+pub(crate) fn chunk_box(points: &[Vec3]) -> (Vec3, Vec3) {
     pulp::Arch::new().dispatch(ChunkBox(points))
 }
 
@@ -628,6 +639,25 @@ impl Influence {
     #[must_use]
     pub fn mask_bounded(&self, positions: &[Vec3], bounds: &ChunkBounds) -> Mask {
         self.mask_with(self.area.as_deref(), positions, None, Some(bounds))
+    }
+
+    /// [`Influence::mask`] of `positions` whose box, as [`ChunkBounds`] computes one (NaN
+    /// left out), is `lo..=hi`: when no volume's cull box reaches that box and the falloff
+    /// has a lane form, every vertex gets the weight of no volume (0, or 1 when inverted)
+    /// without a position read. The same mask.
+    #[must_use]
+    pub fn mask_in_box(&self, positions: &[Vec3], (lo, hi): (Vec3, Vec3)) -> Mask {
+        let culled = LaneInfluence::new(self)
+            .filter(|_| self.area.is_none())
+            .and_then(|lanes| lanes.culled(|l, h| hi.cmpge(l).all() && lo.cmple(h).all()));
+        match culled {
+            Some(w) if w > 0.0 => Mask {
+                indices: (0..positions.len() as u32).collect(),
+                weights: vec![w; positions.len()],
+            },
+            Some(_) => Mask::default(),
+            None => self.mask(positions),
+        }
     }
 
     /// Whether [`Influence::mask_bounded`] reads the chunk boxes on `n` positions: volumes

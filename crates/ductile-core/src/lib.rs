@@ -21,6 +21,7 @@ pub mod dogme;
 pub mod error;
 pub mod ffsd;
 pub mod frames;
+mod fused;
 pub mod influence;
 mod lane;
 pub mod lattice;

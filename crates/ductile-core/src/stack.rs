@@ -18,6 +18,7 @@ use rayon::prelude::*;
 
 use crate::chunks::{CHUNK, PARALLEL_THRESHOLD, Reuse, for_each_at, gather_at, scatter_at, zeroed};
 use crate::error::{CoreError, Result, check_finite};
+use crate::fused;
 use crate::influence::{ChunkBounds, Influence, Mask};
 use crate::mesh::{Deformed, RestMesh, Topology};
 use crate::refinement::{EdgePoint, LayerRefinement, RefinedMesh};
@@ -397,6 +398,35 @@ fn deform_chunks(
     }
 }
 
+/// Deforms the vertices of `mask` with `bind`, a bind of `layer`'s per-vertex tool (not a
+/// whole-layer one) for them, and blends them into `positions`: what
+/// [`LayerBinding::apply_with`] does, with the same bits, for a bind held elsewhere. The
+/// positions are the welded vertices from `offset` on of a larger mesh (a block, see
+/// `fused.rs`), and an error names a vertex by its index in the whole mesh.
+pub(crate) fn apply_per_vertex(
+    layer: &Layer,
+    bind: &ToolBind,
+    mask: &Mask,
+    positions: &mut [Vec3],
+    offset: u32,
+    scratch: &mut Vec<Vec3>,
+) -> Result<()> {
+    debug_assert!(!layer.tool.is_whole_layer());
+    let active = &mask.indices;
+    if scratch.len() < active.len() {
+        *scratch = zeroed(active.len());
+    }
+    let out = &mut scratch[..active.len()];
+    if let Some(k) = deform_chunks(&layer.tool, bind, positions, active, out) {
+        return Err(non_finite(layer, offset + active[k]));
+    }
+    let weights = &mask.weights;
+    for_each_at(positions, active, |k, p| {
+        *p = blend_one(*p, out[k], weights[k] * layer.weight);
+    });
+    Ok(())
+}
+
 /// What [`LayerBinding::apply_recorded`] returns.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Recorded {
@@ -438,7 +468,10 @@ impl Stack {
     }
 
     /// Evaluates the stack on `rest`. Each layer binds on the surface the layers below
-    /// produced: the rest topology, or the refined one after a refining layer.
+    /// produced: the rest topology, or the refined one after a refining layer. Consecutive
+    /// per-vertex layers (volumes without a named area; lattices, curves, axial tools,
+    /// shape surfaces, and DOGME and Direct FFD with point anchors) go a block of vertices
+    /// at a time through all of them (`fused.rs`), with the bits of one layer at a time.
     pub fn evaluate_surface(&self, rest: &RestMesh) -> Result<Evaluation> {
         self.validate()?;
         let mut positions = rest.welded_positions().to_vec();
@@ -448,8 +481,27 @@ impl Stack {
         let mut bounds: Option<ChunkBounds> = None;
         // The per-vertex tools' outputs, one buffer for every layer.
         let mut scratch = Vec::new();
-        for layer in self.layers.iter().filter(|l| !l.is_inert()) {
+        let layers: Vec<&Layer> = self.layers.iter().filter(|l| !l.is_inert()).collect();
+        let mut next = 0;
+        while let Some(&layer) = layers.get(next) {
             let topology = refined.as_ref().map_or(rest.topology(), |r| &r.topology);
+            // A run of per-vertex layers goes a block of vertices at a time (`fused.rs`).
+            let run = layers[next..]
+                .iter()
+                .take_while(|l| fused::is_per_vertex(l))
+                .count();
+            if run > 0 {
+                let run = &layers[next..next + run];
+                let moved = fused::evaluate_run(run, &mut positions, topology)?;
+                if let Some(b) = &mut bounds {
+                    for span in moved {
+                        b.mark_span(span);
+                    }
+                }
+                next += run.len();
+                continue;
+            }
+            next += 1;
             let mask = match &layer.influence {
                 Some(inf) if inf.reads_chunk_bounds(positions.len()) => {
                     let b = bounds.get_or_insert_with(|| ChunkBounds::new(&positions));

@@ -18,7 +18,7 @@ use crate::axial::{AxialBind, AxialTool};
 use crate::chunks::Reuse;
 use crate::curve::{CurveBind, CurveTool};
 use crate::direct_ffd::{DirectFfdBind, DirectFfdTool};
-use crate::dogme::{DogmeBind, DogmeTool};
+use crate::dogme::{Anchor, DogmeBind, DogmeTool};
 use crate::error::Result;
 use crate::ffsd::{FfsdBind, FfsdTool};
 use crate::lattice::{LatticeTool, PreparedLattice};
@@ -209,6 +209,20 @@ impl Tool {
             self,
             Tool::Lattice(_) | Tool::Curve(_) | Tool::Axial(_) | Tool::ShapeSurface(_)
         )
+    }
+
+    /// True when the tool's bind reads neither the input positions nor the active vertices
+    /// (a lattice; DOGME and Direct FFD when every anchor is a point, not a vertex): one
+    /// bind, made on no vertex, deforms any vertex as a bind on it would.
+    #[must_use]
+    pub fn binds_without_vertices(&self) -> bool {
+        let point = |a: &Anchor| matches!(a, Anchor::Point(_));
+        match self {
+            Tool::Lattice(_) => true,
+            Tool::Dogme(t) => t.constraints.iter().all(|c| point(&c.at)),
+            Tool::DirectFfd(t) => t.constraints.iter().all(|c| point(&c.at)),
+            _ => false,
+        }
     }
 
     /// [`Tool::deform`] with the active vertices' input positions already gathered
