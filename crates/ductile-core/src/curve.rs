@@ -357,6 +357,15 @@ impl CurveBind {
     }
 }
 
+/// What a curve bind computes from the tool alone: the basis's evaluator and the rest
+/// curve's power-form pieces with their seed polyline ([`CurveTool::bind_setup`]). Made once,
+/// it serves the binds of many sets of vertices.
+#[derive(Debug, Clone)]
+pub(crate) struct CurveSetup {
+    evaluator: CurveEvaluator,
+    pieces: CurvePieces,
+}
+
 impl CurveTool {
     /// [`Deformer::bind`], copying the entry of every vertex that is not stale from
     /// `previous`, a bind of a tool with the same rest state (see [`Reuse`]): a vertex's
@@ -366,8 +375,24 @@ impl CurveTool {
         input: &BindInput<'_>,
         previous: Option<Reuse<'_, CurveBind>>,
     ) -> Result<CurveBind> {
+        self.bind_set_up(&self.bind_setup()?, input, previous)
+    }
+
+    /// The part of a bind that depends on the tool alone.
+    pub(crate) fn bind_setup(&self) -> Result<CurveSetup> {
         let evaluator = CurveEvaluator::new(self.basis, self.rest.len(), "curve tool")?;
         let pieces = CurvePieces::new(&evaluator, &self.rest);
+        Ok(CurveSetup { evaluator, pieces })
+    }
+
+    /// [`CurveTool::bind_reusing`] with `setup`, this tool's [`CurveTool::bind_setup`].
+    pub(crate) fn bind_set_up(
+        &self,
+        setup: &CurveSetup,
+        input: &BindInput<'_>,
+        previous: Option<Reuse<'_, CurveBind>>,
+    ) -> Result<CurveBind> {
+        let (evaluator, pieces) = (setup.evaluator.clone(), &setup.pieces);
         let (slot, active) = bind_slots(input.positions.len(), input.active);
         let m = active.len();
         let stride = 2 * evaluator.degree() + 1;

@@ -13,7 +13,7 @@
 //! positions, masks and binds stay in the core's cache between layers instead of a pass over
 //! the whole mesh per layer and phase, and the threads meet once per run instead of several
 //! times per layer. A bind that reads no vertex is made once for the run and serves every
-//! block.
+//! block, and so is what a curve's bind computes from the tool alone (its pieces).
 //!
 //! Each vertex goes through the very operations of the layer-by-layer evaluation, so it gets
 //! the same bits. A block whose box no volume of a layer reaches takes that layer's weight of
@@ -32,7 +32,7 @@ use crate::error::{CoreError, Result};
 use crate::influence::{Influence, Mask, chunk_box};
 use crate::mesh::Topology;
 use crate::stack::{Layer, apply_per_vertex};
-use crate::tool::{BindInput, ToolBind};
+use crate::tool::{BindInput, BindSetup, ToolBind};
 
 /// The vertices a block holds: two chunks, small enough that a block's positions and a
 /// layer's bind data for them stay in a core's cache, and below the threshold at which the
@@ -59,26 +59,30 @@ pub(crate) fn evaluate_run(
     topology: &Topology,
 ) -> Result<Vec<Range<usize>>> {
     debug_assert!(run.iter().all(|l| is_per_vertex(l) && !l.is_inert()));
-    // The binds that read no vertex, made once; a block that weighs no vertex of such a
-    // layer does not use it, and its error counts only where a block does.
-    let mut shared: Vec<Option<Result<ToolBind>>> = run
+    // What each layer's binds need from the tool alone, made once: the whole bind of a tool
+    // that reads no vertex, or its setup. A block that weighs no vertex of the layer does not
+    // use it, and its error counts only where a block does.
+    let mut made: Vec<Result<Made>> = run
         .iter()
         .map(|l| {
-            l.tool.binds_without_vertices().then(|| {
-                l.tool.bind(&BindInput {
+            if l.tool.binds_without_vertices() {
+                let input = BindInput {
                     positions: &[],
                     topology,
                     active: &[],
-                })
-            })
+                };
+                l.tool.bind(&input).map(|b| Made::Bind(Box::new(b)))
+            } else {
+                l.tool.bind_setup().map(Made::Setup)
+            }
         })
         .collect();
-    let binds: Vec<Shared<'_>> = shared
+    let binds: Vec<Shared<'_>> = made
         .iter()
-        .map(|b| match b {
-            None => Shared::PerBlock,
-            Some(Ok(b)) => Shared::Made(b),
-            Some(Err(_)) => Shared::Failed,
+        .map(|m| match m {
+            Ok(Made::Bind(b)) => Shared::Bind(b.as_ref()),
+            Ok(Made::Setup(s)) => Shared::Setup(s),
+            Err(_) => Shared::Failed,
         })
         .collect();
     let outcomes: Vec<std::result::Result<Option<Range<usize>>, Failure>> = positions
@@ -104,24 +108,32 @@ pub(crate) fn evaluate_run(
         Some(Failure {
             error: Some(error), ..
         }) => Err(error),
-        Some(Failure { layer, error: None }) => match shared[layer].take() {
-            Some(Err(error)) => Err(error),
-            _ => unreachable!("only a shared bind's failure has no error of its own"),
-        },
+        Some(Failure { layer, error: None }) => {
+            match std::mem::replace(&mut made[layer], Ok(Made::Setup(BindSetup::Nothing))) {
+                Err(error) => Err(error),
+                Ok(_) => unreachable!("only a failed shared part has no error of its own"),
+            }
+        }
         None => Ok(moved),
     }
 }
 
-/// A layer's bind in a run: made for each block, or made once (or failed to be).
+/// What a run makes once for a layer: the bind itself, or the bind's setup.
+enum Made {
+    Bind(Box<ToolBind>),
+    Setup(BindSetup),
+}
+
+/// A layer's part made once, as the blocks read it (or that making it failed).
 #[derive(Clone, Copy)]
 enum Shared<'a> {
-    PerBlock,
-    Made(&'a ToolBind),
+    Bind(&'a ToolBind),
+    Setup(&'a BindSetup),
     Failed,
 }
 
 /// A block's first error, at the layer of the run at position `layer`: its own, or `None`
-/// for the error of the layer's shared bind.
+/// for the error of making the layer's shared part.
 struct Failure {
     layer: usize,
     error: Option<CoreError>,
@@ -154,20 +166,20 @@ fn evaluate_block(
         }
         let own;
         let bind = match *shared {
-            Shared::Made(b) => b,
+            Shared::Bind(b) => b,
             Shared::Failed => {
                 return Err(Failure {
                     layer: k,
                     error: None,
                 });
             }
-            Shared::PerBlock => {
+            Shared::Setup(setup) => {
                 let input = BindInput {
                     positions: block,
                     topology,
                     active: &mask.indices,
                 };
-                own = layer.tool.bind(&input).map_err(fail)?;
+                own = layer.tool.bind_set_up(setup, &input).map_err(fail)?;
                 &own
             }
         };

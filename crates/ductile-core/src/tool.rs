@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::axial::{AxialBind, AxialTool};
 use crate::chunks::Reuse;
-use crate::curve::{CurveBind, CurveTool};
+use crate::curve::{CurveBind, CurveSetup, CurveTool};
 use crate::direct_ffd::{DirectFfdBind, DirectFfdTool};
 use crate::dogme::{Anchor, DogmeBind, DogmeTool};
 use crate::error::Result;
@@ -83,6 +83,15 @@ pub enum Tool {
     DirectFfd(DirectFfdTool),
     /// Shape surface (Feng et al.): a B-spline surface and a height surface.
     ShapeSurface(ShapeSurfaceTool),
+}
+
+/// What a [`Tool`]'s bind computes from the tool alone ([`Tool::bind_setup`]): a curve's
+/// pieces; the other kinds compute theirs in each bind.
+pub(crate) enum BindSetup {
+    /// A curve's evaluator and rest pieces.
+    Curve(Box<CurveSetup>),
+    /// Nothing made ahead.
+    Nothing,
 }
 
 /// The bind of a [`Tool`].
@@ -209,6 +218,25 @@ impl Tool {
             self,
             Tool::Lattice(_) | Tool::Curve(_) | Tool::Axial(_) | Tool::ShapeSurface(_)
         )
+    }
+
+    /// What the tool's bind computes from the tool alone, made once for the binds of many
+    /// sets of vertices ([`Tool::bind_set_up`]).
+    pub(crate) fn bind_setup(&self) -> Result<BindSetup> {
+        Ok(match self {
+            Tool::Curve(t) => BindSetup::Curve(Box::new(t.bind_setup()?)),
+            _ => BindSetup::Nothing,
+        })
+    }
+
+    /// [`Tool::bind`] with `setup`, this tool's [`Tool::bind_setup`]. The same bits.
+    pub(crate) fn bind_set_up(&self, setup: &BindSetup, input: &BindInput<'_>) -> Result<ToolBind> {
+        match (self, setup) {
+            (Tool::Curve(t), BindSetup::Curve(s)) => {
+                Ok(ToolBind::Curve(t.bind_set_up(s, input, None)?))
+            }
+            _ => self.bind(input),
+        }
     }
 
     /// True when the tool's bind reads neither the input positions nor the active vertices
