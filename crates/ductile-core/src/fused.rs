@@ -27,7 +27,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::ops::Range;
 
-use crate::chunks::CHUNK;
+use crate::chunks::{CHUNK, PARALLEL_THRESHOLD};
 use crate::error::{CoreError, Result};
 use crate::influence::{Influence, Mask, chunk_box};
 use crate::mesh::Topology;
@@ -85,15 +85,23 @@ pub(crate) fn evaluate_run(
             Err(_) => Shared::Failed,
         })
         .collect();
-    let outcomes: Vec<std::result::Result<Option<Range<usize>>, Failure>> = positions
-        .par_chunks_mut(BLOCK)
-        .enumerate()
-        .map(|(b, block)| {
-            let start = b * BLOCK;
-            let moved = evaluate_block(run, &binds, block, start, topology)?;
-            Ok(moved.then_some(start..start + block.len()))
-        })
-        .collect();
+    let work = |(b, block): (usize, &mut [Vec3])| {
+        let start = b * BLOCK;
+        let moved = evaluate_block(run, &binds, block, start, topology)?;
+        Ok(moved.then_some(start..start + block.len()))
+    };
+    // A mesh below the parallel threshold makes no parallel call of its own, as a layer's
+    // passes over it make none.
+    let outcomes: Vec<std::result::Result<Option<Range<usize>>, Failure>> =
+        if positions.len() < PARALLEL_THRESHOLD {
+            positions.chunks_mut(BLOCK).enumerate().map(work).collect()
+        } else {
+            positions
+                .par_chunks_mut(BLOCK)
+                .enumerate()
+                .map(work)
+                .collect()
+        };
     let mut moved = Vec::new();
     let mut first: Option<Failure> = None;
     for outcome in outcomes {
@@ -213,10 +221,12 @@ mod tests {
     use crate::tool::Tool;
     use glam::Affine3A;
 
-    /// A wavy 230 × 230 sheet over `[0, 2.29]²`: 52,900 vertices, seven blocks.
-    fn sheet() -> RestMesh {
-        let mesh = crate::primitives::grid(230, 230, false, |r, c| {
-            let (x, y) = (c as f32 / 100.0, r as f32 / 100.0);
+    /// A wavy `n × n` sheet over `[0, 2.29]²`: 230 × 230 makes 52,900 vertices in seven
+    /// blocks (in parallel), 100 × 100 makes 10,000 in two (below the parallel threshold).
+    fn sheet(n: usize) -> RestMesh {
+        let step = 2.29 / (n - 1) as f32;
+        let mesh = crate::primitives::grid(n, n, false, |r, c| {
+            let (x, y) = (c as f32 * step, r as f32 * step);
             Vec3::new(x, y, 0.05 * (7.0 * x).sin() * (5.0 * y).cos())
         });
         RestMesh::new(mesh, "sheet").unwrap()
@@ -333,7 +343,7 @@ mod tests {
             ),
             layer(
                 "vertex dogme",
-                dogme(Anchor::Vertex(30_000)),
+                dogme(Anchor::Vertex(5_000)),
                 around(Vec3::new(1.2, 1.3, 0.0), sphere(0.8), false),
             ),
             layer(
@@ -369,7 +379,6 @@ mod tests {
 
     #[test]
     fn runs_give_the_layer_by_layer_bits() {
-        let rest = sheet();
         let stack = mixed();
         let runs: Vec<bool> = stack.layers.iter().map(is_per_vertex).collect();
         assert_eq!(
@@ -377,22 +386,25 @@ mod tests {
             [true, true, true, true, false, true, false, false, true],
             "which layers a run takes"
         );
-        let want = layer_by_layer(&stack, &rest).unwrap();
-        let moved = want
-            .iter()
-            .zip(rest.welded_positions())
-            .filter(|(a, b)| a != b)
-            .count();
-        assert!(moved > want.len() / 4, "the stack moves much of the sheet");
-        for threads in [1, 2, 3] {
-            let got = on_threads(threads, || stack.evaluate_welded(&rest)).unwrap();
-            assert_eq!(bits(&got), bits(&want), "{threads} threads");
+        for n in [230, 100] {
+            let rest = sheet(n);
+            let want = layer_by_layer(&stack, &rest).unwrap();
+            let moved = want
+                .iter()
+                .zip(rest.welded_positions())
+                .filter(|(a, b)| a != b)
+                .count();
+            assert!(moved > want.len() / 4, "the stack moves much of the sheet");
+            for threads in [1, 2, 3] {
+                let got = on_threads(threads, || stack.evaluate_welded(&rest)).unwrap();
+                assert_eq!(bits(&got), bits(&want), "{n}² vertices, {threads} threads");
+            }
         }
     }
 
     #[test]
     fn a_run_reports_moved_blocks_only() {
-        let rest = sheet();
+        let rest = sheet(230);
         let stack = mixed();
         let mut positions = rest.welded_positions().to_vec();
         let run: Vec<&Layer> = stack.layers[..1].iter().collect();
@@ -430,7 +442,7 @@ mod tests {
 
     #[test]
     fn a_run_reports_the_earliest_failing_layer() {
-        let rest = sheet();
+        let rest = sheet(230);
         // The first failing layer weighs vertices of late blocks only; the second fails in
         // an early block, which a block-by-block run meets first.
         let stack = Stack {
@@ -458,7 +470,7 @@ mod tests {
         );
         let bind = l.tool.bind(&BindInput {
             positions: &[],
-            topology: sheet().topology(),
+            topology: sheet(2).topology(),
             active: &[],
         });
         let mut block = vec![Vec3::splat(0.5); 100];
@@ -483,7 +495,7 @@ mod tests {
 
     #[test]
     fn a_shared_bind_fails_only_where_its_layer_weighs_a_vertex() {
-        let rest = sheet();
+        let rest = sheet(230);
         let direct = |centre| Stack {
             layers: vec![
                 layer("curve", bent_curve(CurveBasis::Bezier, 1.0), None),
