@@ -2,18 +2,21 @@
 //! [`Stack::evaluate`](crate::stack::Stack::evaluate) that takes most of a large mesh's time.
 //!
 //! A layer is *per-vertex* ([`is_per_vertex`]) when each active vertex's weight and
-//! deformed position depend on that vertex's input position alone: its influence has no named
-//! area (a volume weighs a vertex by its position), and its tool's bind either holds data of
-//! each vertex's own input (a curve, an axial tool, a shape surface:
-//! [`Tool::binds_per_vertex`](crate::tool::Tool::binds_per_vertex)) or reads no vertex at all (a lattice; DOGME and Direct FFD with
-//! point anchors: [`Tool::binds_without_vertices`](crate::tool::Tool::binds_without_vertices)). FFSD binds to the vertex nearest each
-//! control point, and a sketch works on the layer as a whole. Consecutive per-vertex layers
-//! form a *run*, and [`evaluate_run`] takes a block of [`BLOCK`] consecutive vertices through
-//! every layer of the run before the next block, the blocks in parallel: the block's
-//! positions, masks and binds stay in the core's cache between layers instead of a pass over
-//! the whole mesh per layer and phase, and the threads meet once per run instead of several
-//! times per layer. A bind that reads no vertex is made once for the run and serves every
-//! block, and so is what a curve's bind computes from the tool alone (its pieces).
+//! deformed position depend on that vertex's input position alone: its influence has no
+//! named area (a volume weighs a vertex by its position), and its tool's bind either holds
+//! data of each vertex's own input (a curve, an axial tool, a shape surface:
+//! [`Tool::binds_per_vertex`](crate::tool::Tool::binds_per_vertex)) or reads no vertex at
+//! all (a lattice; DOGME and Direct FFD with point anchors:
+//! [`Tool::binds_without_vertices`](crate::tool::Tool::binds_without_vertices)). FFSD binds
+//! to the vertex nearest each control point, and a sketch works on the layer as a whole.
+//! Consecutive per-vertex layers form a *run*, and [`evaluate_run`] takes a block of
+//! [`BLOCK`] consecutive vertices through every layer of the run before the next block, the
+//! blocks in parallel (one after the other on a mesh below the parallel threshold): the
+//! block's positions, masks and binds stay in the core's cache between layers instead of a
+//! pass over the whole mesh per layer and phase, and the threads meet once per run instead
+//! of several times per layer. A bind that reads no vertex is made once for the run and
+//! serves every block, and so is what a curve's bind computes from the tool alone (its
+//! pieces).
 //!
 //! Each vertex goes through the very operations of the layer-by-layer evaluation, so it gets
 //! the same bits. A block whose box no volume of a layer reaches takes that layer's weight of
