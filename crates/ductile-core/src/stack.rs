@@ -323,16 +323,10 @@ impl LayerBinding {
                 *scratch = r.out;
                 (r.refinement, bad)
             }
-            None => {
-                if scratch.len() < active.len() {
-                    *scratch = zeroed(active.len());
-                }
-                let out = &mut scratch[..active.len()];
-                (
-                    None,
-                    deform_chunks(&layer.tool, bind, positions, active, out),
-                )
-            }
+            None => (
+                None,
+                deform_per_vertex(&layer.tool, bind, positions, active, scratch),
+            ),
         };
         if let Some(k) = bad {
             return Err(non_finite(layer, active[k]));
@@ -343,11 +337,32 @@ impl LayerBinding {
     /// `p'ᵢ = pᵢ + weight · wᵢ · (D(pᵢ) − pᵢ)` over the active vertices, exactly `D(pᵢ)` when
     /// `weight · wᵢ = 1`.
     fn blend(&self, layer: &Layer, out: &[Vec3], positions: &mut [Vec3]) {
-        let weights = &self.mask.weights;
-        for_each_at(positions, &self.mask.indices, |k, p| {
-            *p = blend_one(*p, out[k], weights[k] * layer.weight);
-        });
+        blend_mask(layer, &self.mask, out, positions);
     }
+}
+
+/// [`LayerBinding::blend`] for the vertices of `mask`, `out` in mask order.
+fn blend_mask(layer: &Layer, mask: &Mask, out: &[Vec3], positions: &mut [Vec3]) {
+    let weights = &mask.weights;
+    for_each_at(positions, &mask.indices, |k, p| {
+        *p = blend_one(*p, out[k], weights[k] * layer.weight);
+    });
+}
+
+/// A per-vertex tool's output for `active` in the first `active.len()` values of `scratch`
+/// (grown with zeros when shorter), in (parallel) chunks; returns the position of the first
+/// non-finite one.
+fn deform_per_vertex(
+    tool: &Tool,
+    bind: &ToolBind,
+    positions: &[Vec3],
+    active: &[u32],
+    scratch: &mut Vec<Vec3>,
+) -> Option<usize> {
+    if scratch.len() < active.len() {
+        *scratch = zeroed(active.len());
+    }
+    deform_chunks(tool, bind, positions, active, &mut scratch[..active.len()])
 }
 
 /// The error of a layer whose tool produced a non-finite position for `vertex`.
@@ -413,17 +428,10 @@ pub(crate) fn apply_per_vertex(
 ) -> Result<()> {
     debug_assert!(!layer.tool.is_whole_layer());
     let active = &mask.indices;
-    if scratch.len() < active.len() {
-        *scratch = zeroed(active.len());
-    }
-    let out = &mut scratch[..active.len()];
-    if let Some(k) = deform_chunks(&layer.tool, bind, positions, active, out) {
+    if let Some(k) = deform_per_vertex(&layer.tool, bind, positions, active, scratch) {
         return Err(non_finite(layer, offset + active[k]));
     }
-    let weights = &mask.weights;
-    for_each_at(positions, active, |k, p| {
-        *p = blend_one(*p, out[k], weights[k] * layer.weight);
-    });
+    blend_mask(layer, mask, &scratch[..active.len()], positions);
     Ok(())
 }
 
