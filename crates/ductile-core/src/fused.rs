@@ -405,6 +405,63 @@ mod tests {
         }
     }
 
+    /// A layer that lifts the middle of the sheet by about 1 and one whose volume lies where
+    /// it lifts them, which no vertex reaches at rest: the second layer must cull the blocks
+    /// the first moved by their new boxes, not by their boxes at rest.
+    #[test]
+    fn a_volume_weighs_the_vertices_an_earlier_layer_of_the_run_moved_into_it() {
+        let centre = Vec3::new(1.1, 1.1, 0.0);
+        let lift = Tool::Dogme(DogmeTool {
+            constraints: vec![Constraint {
+                at: Anchor::Point(centre),
+                displacement: Vec3::Z,
+                support: Support::Sphere { radius: 0.5 },
+            }],
+            degree: 3,
+        });
+        let push = lattice(
+            Vec3::new(0.5, 0.5, 0.5),
+            Vec3::new(1.7, 1.7, 1.5),
+            Vec3::new(0.3, 0.0, 0.0),
+        );
+        let stack = Stack {
+            layers: vec![
+                layer(
+                    "lift",
+                    lift,
+                    around(centre, Shape::Sphere { radius: 0.6 }, false),
+                ),
+                layer(
+                    "push",
+                    Tool::Lattice(push),
+                    around(centre + Vec3::Z, Shape::Sphere { radius: 0.3 }, false),
+                ),
+            ],
+        };
+        let rest = sheet(230);
+        assert!(
+            rest.welded_positions().iter().all(|p| p.z < 0.5),
+            "at rest no vertex is in the second volume"
+        );
+        let lifted = layer_by_layer(
+            &Stack {
+                layers: stack.layers[..1].to_vec(),
+            },
+            &rest,
+        )
+        .unwrap();
+        let want = layer_by_layer(&stack, &rest).unwrap();
+        let pushed = want.iter().zip(&lifted).filter(|(a, b)| a != b).count();
+        assert!(
+            pushed > 200,
+            "the second layer moves {pushed} lifted vertices"
+        );
+        for threads in [1, 2] {
+            let got = on_threads(threads, || stack.evaluate_welded(&rest)).unwrap();
+            assert_eq!(bits(&got), bits(&want), "{threads} threads");
+        }
+    }
+
     #[test]
     fn a_run_reports_moved_blocks_only() {
         let rest = sheet(230);
