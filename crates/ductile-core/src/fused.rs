@@ -15,8 +15,8 @@
 //! block's positions, masks and binds stay in the core's cache between layers instead of a
 //! pass over the whole mesh per layer and phase, and the threads meet once per run instead
 //! of several times per layer. A bind that reads no vertex is made once for the run and
-//! serves every block, and so is what a curve's bind computes from the tool alone (its
-//! pieces).
+//! serves every block, and so is what a curve's or a shape surface's bind computes from the
+//! tool alone (their pieces, knots and nets).
 //!
 //! Each vertex goes through the very operations of the layer-by-layer evaluation, so it gets
 //! the same bits. A block whose box no volume of a layer reaches takes that layer's weight of
@@ -213,6 +213,7 @@ fn mask(inf: &Influence, block: &[Vec3], bounds: &mut Option<(Vec3, Vec3)>) -> M
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::axial::{AxialTool, AxisPoint};
     use crate::curve::{CurveBasis, CurveTool};
     use crate::direct_ffd::{DirectConstraint, DirectFfdTool};
     use crate::dogme::{Anchor, Constraint, DogmeTool, Support};
@@ -221,6 +222,7 @@ mod tests {
     use crate::lattice::{LatticeFrame, LatticeTool};
     use crate::mesh::RestMesh;
     use crate::stack::{LayerBinding, Stack};
+    use crate::surface::{ShapeSurfaceTool, SurfaceEdit, SurfaceFrame};
     use crate::tool::Tool;
     use glam::Affine3A;
 
@@ -279,6 +281,41 @@ mod tests {
         })
     }
 
+    /// A bicubic shape surface over the sheet with a control point raised; `curved` gives
+    /// it a rest edit (a search for each closest point instead of the plane's projection).
+    fn surface(curved: bool) -> Tool {
+        let frame = SurfaceFrame {
+            origin: Vec3::new(0.1, 0.1, 0.0),
+            u_edge: Vec3::new(2.1, 0.0, 0.0),
+            v_edge: Vec3::new(0.0, 2.1, 0.0),
+        };
+        let mut tool = ShapeSurfaceTool::planar(frame, (5, 5));
+        tool.moves.push(SurfaceEdit {
+            at: (2, 2),
+            offset: Vec3::new(0.0, 0.1, 0.25),
+        });
+        if curved {
+            tool.rest.push(SurfaceEdit {
+                at: (3, 1),
+                offset: Vec3::new(0.0, 0.0, 0.15),
+            });
+        }
+        Tool::ShapeSurface(tool)
+    }
+
+    /// A twisted and bent axial tool along `x`.
+    fn axial() -> Tool {
+        let point = |x: f32| AxisPoint {
+            position: Vec3::new(x, 0.4, 0.0),
+            twist: 0.0,
+            scale: 1.0,
+        };
+        let mut tool = AxialTool::new(vec![point(0.4), point(1.2), point(2.0)], 0.4);
+        tool.deformed[2].position.y += 0.2;
+        tool.deformed[2].twist = 0.5;
+        Tool::Axial(tool)
+    }
+
     /// Every kind of layer a run takes, and the kinds that end one: per-vertex layers with
     /// their own binds and with one shared bind, volumes that reach some blocks, every block
     /// (inverted, so that culled blocks take weight 1) or none, no influence, and between
@@ -319,6 +356,21 @@ mod tests {
                 "dogme",
                 dogme(Anchor::Point(Vec3::new(1.5, 1.5, 0.0))),
                 None,
+            ),
+            layer(
+                "surface",
+                surface(false),
+                around(Vec3::new(0.6, 1.6, 0.0), sphere(0.5), false),
+            ),
+            layer(
+                "curved surface",
+                surface(true),
+                around(Vec3::new(1.6, 0.6, 0.0), cube(0.45), false),
+            ),
+            layer(
+                "axial",
+                axial(),
+                around(Vec3::new(1.2, 0.4, 0.0), sphere(0.5), false),
             ),
             layer(
                 "nowhere",
@@ -386,7 +438,9 @@ mod tests {
         let runs: Vec<bool> = stack.layers.iter().map(is_per_vertex).collect();
         assert_eq!(
             runs,
-            [true, true, true, true, false, true, false, false, true],
+            [
+                true, true, true, true, true, true, true, false, true, false, false, true
+            ],
             "which layers a run takes"
         );
         for n in [230, 100] {

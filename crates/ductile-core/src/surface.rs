@@ -14,6 +14,8 @@
 //! where they are: the deformed area is "the space projecting on the shape surface".
 //! `docs/algorithms/shape-surface.md` gives the details.
 
+use std::sync::Arc;
+
 use glam::{Affine3A, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -371,7 +373,7 @@ enum BoundBases {
     /// (degrees up to 3, the Add menu's bicubic surfaces): one vector's Horner steps per
     /// direction, the same call as the bind's and so the same bits. Reading them from memory
     /// instead (64 bytes per bicubic point) cost more than this (2026-11-29).
-    Pieces(Box<[Option<BasisPieces>; 2]>),
+    Pieces(Arc<[Option<BasisPieces>; 2]>),
     /// Kept per bound point, `2(p_u + 1) + 2(p_v + 1)` values each: degrees above 3 (Horner's
     /// rule per function, not in one vector), or a knot vector too long for a piece table
     /// (the recurrence, with divisions).
@@ -485,6 +487,19 @@ fn closest_point(
     (u, v, s)
 }
 
+/// What a shape-surface bind computes from the tool alone ([`ShapeSurfaceTool::bind_setup`]):
+/// the knots, the rest net, the seeds of the closest-point search on a curved rest surface,
+/// the plane's projection, and the basis pieces. Made once, it serves the binds of many sets
+/// of vertices.
+#[derive(Debug, Clone)]
+pub(crate) struct SurfaceSetup {
+    knots: [KnotVector; 2],
+    rest: Vec<Vec3>,
+    samples: Vec<(f32, f32, Vec3)>,
+    plane: Option<PlanarProjection>,
+    pieces: Arc<[Option<BasisPieces>; 2]>,
+}
+
 impl ShapeSurfaceTool {
     /// [`Deformer::bind`], copying the entry of every vertex that is not stale from
     /// `previous`, a bind of a tool with the same rest state (see [`Reuse`]): a vertex's
@@ -495,6 +510,11 @@ impl ShapeSurfaceTool {
         input: &BindInput<'_>,
         previous: Option<Reuse<'_, SurfaceBind>>,
     ) -> Result<SurfaceBind> {
+        self.bind_set_up(&self.bind_setup()?, input, previous)
+    }
+
+    /// The part of a bind that depends on the tool alone.
+    pub(crate) fn bind_setup(&self) -> Result<SurfaceSetup> {
         let knots = self.knots().ok_or_else(|| CoreError::OutOfRange {
             what: "shape surface: counts / degree".into(),
             value: f64::from(self.counts.0.min(self.counts.1)),
@@ -515,7 +535,6 @@ impl ShapeSurfaceTool {
                 samples.push((u, v, eval_net(&rest, n_u, pu, pv, &bases(&knots, u, v))[0]));
             }
         }
-        let size = self.frame.u_edge.length() + self.frame.v_edge.length();
         // A rest surface without rest edits is the frame's plane, `S(u, v) = O + u·U + v·V`
         // exactly (B-splines reproduce linear functions from the Greville abscissae): its
         // closest point solves the 2×2 normal equations directly instead of a search, a lane
@@ -527,7 +546,34 @@ impl ShapeSurfaceTool {
         };
         // The bases at each bound point, from power-form pieces (no knot search or
         // division): evaluated again by deform for degrees up to 3, else kept per point.
-        let pieces = [BasisPieces::new(&knots[0]), BasisPieces::new(&knots[1])];
+        let pieces = Arc::new([BasisPieces::new(&knots[0]), BasisPieces::new(&knots[1])]);
+        Ok(SurfaceSetup {
+            knots,
+            rest,
+            samples,
+            plane,
+            pieces,
+        })
+    }
+
+    /// [`ShapeSurfaceTool::bind_reusing`] with `setup`, this tool's
+    /// [`ShapeSurfaceTool::bind_setup`].
+    pub(crate) fn bind_set_up(
+        &self,
+        setup: &SurfaceSetup,
+        input: &BindInput<'_>,
+        previous: Option<Reuse<'_, SurfaceBind>>,
+    ) -> Result<SurfaceBind> {
+        let SurfaceSetup {
+            knots,
+            rest,
+            samples,
+            plane,
+            pieces,
+        } = setup;
+        let (knots, plane) = (knots.clone(), *plane);
+        let (pu, pv) = (knots[0].degree(), knots[1].degree());
+        let size = self.frame.u_edge.length() + self.frame.v_edge.length();
         let evaluated = pu <= 3 && pv <= 3 && pieces.iter().all(Option::is_some);
         // The values kept per bound point (none where deform evaluates them).
         let stride = if evaluated {
@@ -538,9 +584,9 @@ impl ShapeSurfaceTool {
         // The bound point at `(u, v, u₃)`, its basis values written to `weights` (`stride`
         // long: empty where deform evaluates them).
         let bound = |(u, v, u3): (f32, f32, f32), weights: &mut [f32]| {
-            let (first_u, first_v) = match &pieces {
+            let (first_u, first_v) = match &**pieces {
                 [Some(a), Some(b)] if evaluated => (a.first_at(u), b.first_at(v)),
-                _ => piece_bases_into(&pieces, &knots, u, v, weights),
+                _ => piece_bases_into(pieces, &knots, u, v, weights),
             };
             Bound {
                 uv: (u, v),
@@ -552,7 +598,7 @@ impl ShapeSurfaceTool {
         // edges give no positive determinant) with its rest frame, its basis values written
         // to `weights`; `None` (and `weights` untouched) where it does not project.
         let project = |x: Vec3, weights: &mut [f32]| -> Option<(Bound, RestFrame)> {
-            let (u, v, s) = closest_point(&knots, &rest, &samples, x);
+            let (u, v, s) = closest_point(&knots, rest, samples, x);
             let n = s[1].cross(s[2]);
             if n.length_squared().is_nan() || n.length_squared() <= 0.0 {
                 return None;
@@ -670,7 +716,7 @@ impl ShapeSurfaceTool {
             None => RestFrames::PerPoint(frames),
         };
         let bases = if evaluated {
-            BoundBases::Pieces(Box::new(pieces))
+            BoundBases::Pieces(Arc::clone(pieces))
         } else {
             BoundBases::Kept(weights)
         };
@@ -680,7 +726,7 @@ impl ShapeSurfaceTool {
             points,
             frames,
             bases,
-            rest,
+            rest: rest.clone(),
         })
     }
 }

@@ -25,7 +25,7 @@ use crate::lattice::{LatticeTool, PreparedLattice};
 use crate::mesh::Topology;
 use crate::refinement::WholeDeform;
 use crate::sketch::tool::{SketchBind, SketchTool};
-use crate::surface::{ShapeSurfaceTool, SurfaceBind};
+use crate::surface::{ShapeSurfaceTool, SurfaceBind, SurfaceSetup};
 
 /// What a tool sees when it binds: the layer's input.
 #[derive(Debug, Clone, Copy)]
@@ -86,10 +86,13 @@ pub enum Tool {
 }
 
 /// What a [`Tool`]'s bind computes from the tool alone ([`Tool::bind_setup`]): a curve's
-/// pieces; the other kinds compute theirs in each bind.
+/// pieces, a shape surface's knots, nets and basis pieces; the other kinds compute theirs in
+/// each bind.
 pub(crate) enum BindSetup {
     /// A curve's evaluator and rest pieces.
     Curve(Box<CurveSetup>),
+    /// A shape surface's knots, rest net, search seeds and basis pieces.
+    Surface(Box<SurfaceSetup>),
     /// Nothing made ahead.
     Nothing,
 }
@@ -225,6 +228,7 @@ impl Tool {
     pub(crate) fn bind_setup(&self) -> Result<BindSetup> {
         Ok(match self {
             Tool::Curve(t) => BindSetup::Curve(Box::new(t.bind_setup()?)),
+            Tool::ShapeSurface(t) => BindSetup::Surface(Box::new(t.bind_setup()?)),
             _ => BindSetup::Nothing,
         })
     }
@@ -235,6 +239,9 @@ impl Tool {
             (Tool::Curve(t), BindSetup::Curve(s)) => {
                 Ok(ToolBind::Curve(t.bind_set_up(s, input, None)?))
             }
+            (Tool::ShapeSurface(t), BindSetup::Surface(s)) => Ok(ToolBind::ShapeSurface(Box::new(
+                t.bind_set_up(s, input, None)?,
+            ))),
             _ => self.bind(input),
         }
     }
