@@ -16,8 +16,7 @@
 //! pass over the whole mesh per layer and phase, and the threads meet once per run instead
 //! of several times per layer. A bind that reads no vertex is made once for the run and
 //! serves every block, and so is what a curve's or a shape surface's bind computes from the
-//! tool alone (their pieces, knots and nets), each when the first block that weighs a vertex
-//! of its layer needs it (a layer that weighs none makes nothing, as a layer pass would not).
+//! tool alone (their pieces, knots and nets).
 //!
 //! Each vertex goes through the very operations of the layer-by-layer evaluation, so it gets
 //! the same bits. A block whose box no volume of a layer reaches takes that layer's weight of
@@ -30,7 +29,6 @@
 use glam::Vec3;
 use rayon::prelude::*;
 use std::ops::Range;
-use std::sync::OnceLock;
 
 use crate::chunks::{CHUNK, PARALLEL_THRESHOLD};
 use crate::error::{CoreError, Result};
@@ -64,17 +62,35 @@ pub(crate) fn evaluate_run(
     topology: &Topology,
 ) -> Result<Vec<Range<usize>>> {
     debug_assert!(run.iter().all(|l| is_per_vertex(l) && !l.is_inert()));
-    // What each layer's binds need from the tool alone, made once, when the first block
-    // that weighs a vertex of the layer needs it: the whole bind of a tool that reads no
-    // vertex, or its setup. Its error counts only where a block weighs a vertex.
-    let parts = Parts {
-        run,
-        topology,
-        made: run.iter().map(|_| OnceLock::new()).collect(),
-    };
+    // What each layer's binds need from the tool alone, made once: the whole bind of a tool
+    // that reads no vertex, or its setup. A block that weighs no vertex of the layer does not
+    // use it, and its error counts only where a block does.
+    let mut made: Vec<Result<Made>> = run
+        .iter()
+        .map(|l| {
+            if l.tool.binds_without_vertices() {
+                let input = BindInput {
+                    positions: &[],
+                    topology,
+                    active: &[],
+                };
+                l.tool.bind(&input).map(|b| Made::Bind(Box::new(b)))
+            } else {
+                l.tool.bind_setup().map(Made::Setup)
+            }
+        })
+        .collect();
+    let binds: Vec<Shared<'_>> = made
+        .iter()
+        .map(|m| match m {
+            Ok(Made::Bind(b)) => Shared::Bind(b.as_ref()),
+            Ok(Made::Setup(s)) => Shared::Setup(s),
+            Err(_) => Shared::Failed,
+        })
+        .collect();
     let work = |(b, block): (usize, &mut [Vec3])| {
         let start = b * BLOCK;
-        let moved = evaluate_block(&parts, block, start)?;
+        let moved = evaluate_block(run, &binds, block, start, topology)?;
         Ok(moved.then_some(start..start + block.len()))
     };
     // A mesh below the parallel threshold makes no parallel call of its own, as a layer's
@@ -104,14 +120,9 @@ pub(crate) fn evaluate_run(
             error: Some(error), ..
         }) => Err(error),
         Some(Failure { layer, error: None }) => {
-            match parts
-                .made
-                .into_iter()
-                .nth(layer)
-                .and_then(OnceLock::into_inner)
-            {
-                Some(Err(error)) => Err(error),
-                _ => unreachable!("only a failed shared part has no error of its own"),
+            match std::mem::replace(&mut made[layer], Ok(Made::Setup(BindSetup::Nothing))) {
+                Err(error) => Err(error),
+                Ok(_) => unreachable!("only a failed shared part has no error of its own"),
             }
         }
         None => Ok(moved),
@@ -122,37 +133,6 @@ pub(crate) fn evaluate_run(
 enum Made {
     Bind(Box<ToolBind>),
     Setup(BindSetup),
-}
-
-/// A run's layers and the parts of their binds made once for every block.
-struct Parts<'a> {
-    run: &'a [&'a Layer],
-    topology: &'a Topology,
-    made: Vec<OnceLock<Result<Made>>>,
-}
-
-impl Parts<'_> {
-    /// The part of layer `k` of the run made once, made now if no block has made it yet.
-    fn shared(&self, k: usize) -> Shared<'_> {
-        let layer = self.run[k];
-        let made = self.made[k].get_or_init(|| {
-            if layer.tool.binds_without_vertices() {
-                let input = BindInput {
-                    positions: &[],
-                    topology: self.topology,
-                    active: &[],
-                };
-                layer.tool.bind(&input).map(|b| Made::Bind(Box::new(b)))
-            } else {
-                layer.tool.bind_setup().map(Made::Setup)
-            }
-        });
-        match made {
-            Ok(Made::Bind(b)) => Shared::Bind(b.as_ref()),
-            Ok(Made::Setup(s)) => Shared::Setup(s),
-            Err(_) => Shared::Failed,
-        }
-    }
 }
 
 /// A layer's part made once, as the blocks read it (or that making it failed).
@@ -170,18 +150,20 @@ struct Failure {
     error: Option<CoreError>,
 }
 
-/// Takes the block of vertices `start..` through every layer of the run of `parts`; returns
-/// whether a layer moved any of them.
+/// Takes the block of vertices `start..` through every layer of `run` (with `binds`, one per
+/// layer); returns whether a layer moved any of them.
 fn evaluate_block(
-    parts: &Parts<'_>,
+    run: &[&Layer],
+    binds: &[Shared<'_>],
     block: &mut [Vec3],
     start: usize,
+    topology: &Topology,
 ) -> std::result::Result<bool, Failure> {
     let mut scratch = Vec::new();
     // The block's box, computed when a mask needs it and dropped when a layer moves a vertex.
     let mut bounds: Option<(Vec3, Vec3)> = None;
     let mut moved = false;
-    for (k, layer) in parts.run.iter().enumerate() {
+    for (k, (layer, shared)) in run.iter().zip(binds).enumerate() {
         let fail = |error| Failure {
             layer: k,
             error: Some(error),
@@ -194,7 +176,7 @@ fn evaluate_block(
             continue;
         }
         let own;
-        let bind = match parts.shared(k) {
+        let bind = match *shared {
             Shared::Bind(b) => b,
             Shared::Failed => {
                 return Err(Failure {
@@ -205,7 +187,7 @@ fn evaluate_block(
             Shared::Setup(setup) => {
                 let input = BindInput {
                     positions: block,
-                    topology: parts.topology,
+                    topology,
                     active: &mask.indices,
                 };
                 own = layer.tool.bind_set_up(setup, &input).map_err(fail)?;
