@@ -764,11 +764,12 @@ impl Influence {
                 None => gather(0..n as u32, positions, &weight, reuse, 0),
             };
         }
-        // Chunks in parallel, each gathering its own part in order, then copied in order
-        // into the mask (in parallel too).
+        // Chunks in parallel, one task each (as in `gather_lanes`), each gathering its own
+        // part in order, then copied in order into the mask (in parallel too).
         let parts: Vec<Mask> = match area {
             Some(area) => area
                 .par_chunks(CHUNK)
+                .with_max_len(1)
                 .map(|c| {
                     gather(
                         c.iter().copied().filter(|&i| (i as usize) < n),
@@ -781,6 +782,7 @@ impl Influence {
                 .collect(),
             None => (0..n.div_ceil(CHUNK))
                 .into_par_iter()
+                .with_max_len(1)
                 .map(|c| {
                     let end = ((c + 1) * CHUNK).min(n);
                     let start = (c * CHUNK) as u32;
@@ -819,18 +821,23 @@ fn gather_lanes(
     bounds: Option<&ChunkBounds>,
 ) -> Mask {
     let gather = |ids| lanes.gather(ids, positions, reuse);
+    // In parallel, one task per chunk (`with_max_len(1)`): chunks that no cull box reaches
+    // cost nothing, so equal splits of the chunks are not equal work, and rayon's default
+    // split could leave a thread alone with a costly part (see `fused.rs`).
     match area {
         Some(area) if area.len() < PARALLEL_THRESHOLD => gather(Ids::List(area)),
         None if n < PARALLEL_THRESHOLD => gather(Ids::Range(0, n as u32)),
         Some(area) => join(
             &area
                 .par_chunks(CHUNK)
+                .with_max_len(1)
                 .map(|c| gather(Ids::List(c)))
                 .collect::<Vec<_>>(),
         ),
         None => join(
             &(0..n.div_ceil(CHUNK))
                 .into_par_iter()
+                .with_max_len(1)
                 .map(|c| {
                     let (start, end) = (c * CHUNK, ((c + 1) * CHUNK).min(n));
                     // A chunk no cull box reaches: every vertex has the weight of no volume.
