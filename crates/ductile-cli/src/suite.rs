@@ -7,7 +7,7 @@
 //! |---|---|
 //! | `identikit-30` | 30 FFSD macros on the head (8,844 welded vertices), full evaluation with normals, 1 thread |
 //! | `mixed-1m/full` | the head split 11×11 (1.07 M welded vertices), 30 mixed layers, full evaluation with normals, 2 threads |
-//! | `mixed-1m/full-1t` | the same on 1 thread (the speed-up is the ratio) |
+//! | `mixed-1m/full-1t` | the same on 1 thread, judged by the speed-up `full-1t / full` (at least [`SPEED_UP_TARGET`]), not by a time target |
 //! | `mixed-1m/edit-top` | the same stack, the top layer's moved state changed, the incremental evaluator |
 //! | `mixed-1m/edit-middle` | the same, the 16th of 30 layers changed: the 14 layers above it read what it moved |
 //! | `lattice-1m` | a Bernstein 4×4×4 lattice on 1 M points, bind and deform, 2 threads |
@@ -84,8 +84,9 @@ pub struct Outcome {
     pub p95_ms: f64,
     /// How many runs were timed.
     pub samples: usize,
-    /// The target on the project's 2-core machine, ms.
-    pub target_ms: f64,
+    /// The time target on the project's 2-core machine, ms; `None` for the one-thread case,
+    /// whose criterion is the speed-up ([`speed_up`]).
+    pub target_ms: Option<f64>,
 }
 
 impl Outcome {
@@ -105,6 +106,22 @@ impl Outcome {
         })
         .to_string()
     }
+}
+
+/// The least speed-up of `mixed-1m/full` from one thread to two that issue 15 asks for.
+pub const SPEED_UP_TARGET: f64 = 1.8;
+
+/// The speed-up of the full evaluation from one thread to two, `full-1t` over `full` (their
+/// medians), when `outcomes` hold both.
+#[must_use]
+pub fn speed_up(outcomes: &[Outcome]) -> Option<f64> {
+    let median = |case: Case| {
+        outcomes
+            .iter()
+            .find(|o| o.case == case.name())
+            .map(|o| o.median_ms)
+    };
+    Some(median(Case::MixedFullOneThread)? / median(Case::MixedFull)?)
 }
 
 /// A case ready to run: what it is, and one timed run.
@@ -185,17 +202,17 @@ impl Case {
         }
     }
 
-    /// The target on the project's 2-core machine, ms (issue 15).
+    /// The time target on the project's 2-core machine, ms (issue 15). The one-thread case
+    /// has none: issue 15 asks of it a speed-up ([`SPEED_UP_TARGET`], [`speed_up`]).
     #[must_use]
-    pub fn target_ms(self) -> f64 {
+    pub fn target_ms(self) -> Option<f64> {
         match self {
-            Case::Identikit => 1.0,
-            Case::MixedFull => 150.0,
-            // Half the 2-thread target's 1.8× speed-up: 150 ms × 1.8.
-            Case::MixedFullOneThread => 270.0,
-            Case::MixedEditTop | Case::MixedEditMiddle => 16.0,
-            Case::Lattice => 8.0,
-            Case::Batch => 10_000.0,
+            Case::Identikit => Some(1.0),
+            Case::MixedFull => Some(150.0),
+            Case::MixedFullOneThread => None,
+            Case::MixedEditTop | Case::MixedEditMiddle => Some(16.0),
+            Case::Lattice => Some(8.0),
+            Case::Batch => Some(10_000.0),
         }
     }
 
@@ -625,6 +642,35 @@ mod tests {
         let mut t: Vec<Duration> = (1..=20).rev().map(ms).collect();
         assert_eq!(median_p95(&mut t), (Duration::from_micros(10_500), ms(19)));
         assert_eq!(median_p95(&mut [ms(3)]), (ms(3), ms(3)));
+    }
+
+    /// The one-thread case is judged by the speed-up (issue 15: 1 thread vs 2 threads,
+    /// at least 1.8×), not by a time of its own; its JSON line says so with a null target.
+    #[test]
+    fn the_speed_up_is_the_one_thread_median_over_the_two_thread_one() {
+        let outcome = |case: Case, median_ms: f64| Outcome {
+            case: case.name(),
+            vertices: 1,
+            layers: 1,
+            threads: 1,
+            median_ms,
+            p95_ms: median_ms,
+            samples: 1,
+            target_ms: case.target_ms(),
+        };
+        let full = outcome(Case::MixedFull, 160.0);
+        let one = outcome(Case::MixedFullOneThread, 320.0);
+        assert_eq!(speed_up(&[one.clone(), full.clone()]), Some(2.0));
+        assert_eq!(speed_up(std::slice::from_ref(&full)), None);
+        assert_eq!(speed_up(std::slice::from_ref(&one)), None);
+        let slow = outcome(Case::MixedFullOneThread, 240.0);
+        assert!(speed_up(&[full.clone(), slow]).unwrap() < SPEED_UP_TARGET);
+        assert_eq!(Case::MixedFullOneThread.target_ms(), None);
+        assert_eq!(Case::MixedFull.target_ms(), Some(150.0));
+        let json: serde_json::Value = serde_json::from_str(&one.json()).unwrap();
+        assert!(json["target_ms"].is_null(), "{json}");
+        let json: serde_json::Value = serde_json::from_str(&full.json()).unwrap();
+        assert_eq!(json["target_ms"], 150.0);
     }
 
     #[test]

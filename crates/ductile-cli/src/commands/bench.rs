@@ -143,6 +143,7 @@ fn run_suite(args: &Args, out: &mut dyn Write) -> anyhow::Result<u8> {
         )?;
     }
     let mut fixtures = Fixtures::default();
+    let mut outcomes = Vec::new();
     let mut missed = 0;
     for case in cases {
         let samples = args.iterations.map_or(case.samples(), |n| n as usize);
@@ -150,24 +151,34 @@ fn run_suite(args: &Args, out: &mut dyn Write) -> anyhow::Result<u8> {
         if args.json {
             writeln!(out, "{}", o.json())?;
         } else {
-            let met = o.median_ms <= o.target_ms;
-            missed += usize::from(!met);
+            let (target, verdict) = match o.target_ms {
+                Some(t) => {
+                    let met = o.median_ms <= t;
+                    missed += usize::from(!met);
+                    (format!("≤ {t}"), if met { "met" } else { "NOT MET" })
+                }
+                None => ("—".to_owned(), "(speed-up below)"),
+            };
             writeln!(
                 out,
                 "{:<22} {:>9} {:>6} {:>7} {:>11.3} {:>11.3} {:>9} {}",
-                o.case,
-                o.vertices,
-                o.layers,
-                o.threads,
-                o.median_ms,
-                o.p95_ms,
-                format!("≤ {}", o.target_ms),
-                if met { "met" } else { "NOT MET" }
+                o.case, o.vertices, o.layers, o.threads, o.median_ms, o.p95_ms, target, verdict
             )?;
         }
         out.flush()?;
+        outcomes.push(o);
     }
     if !args.json {
+        if let Some(r) = crate::suite::speed_up(&outcomes) {
+            let met = r >= crate::suite::SPEED_UP_TARGET;
+            missed += usize::from(!met);
+            writeln!(
+                out,
+                "speed-up of mixed-1m/full, 1 → 2 threads: {r:.2}× (target ≥ {}×) {}",
+                crate::suite::SPEED_UP_TARGET,
+                if met { "met" } else { "NOT MET" }
+            )?;
+        }
         writeln!(
             out,
             "peak resident memory {:.0} MB; {missed} target(s) not met",
