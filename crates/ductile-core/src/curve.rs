@@ -378,6 +378,25 @@ impl CurveTool {
         self.bind_set_up(&self.bind_setup()?, input, previous)
     }
 
+    /// What [`Deformer::deform`] sums: each control point's move `Qᵢ − Pᵢ` and each
+    /// segment's turn `Rᵢ − I`, in SIMD vectors (`Vec3A`, `Mat3A`: the same component-wise
+    /// products and sums as `Vec3` and `Mat3`, so the same bits, a vector operation for
+    /// three).
+    fn moves_and_turns(&self) -> (Vec<Vec3A>, Vec<Mat3A>) {
+        let moves = self
+            .deformed
+            .iter()
+            .zip(&self.rest)
+            .map(|(q, p)| Vec3A::from(*q - *p))
+            .collect();
+        let turns = self
+            .segment_rotations()
+            .into_iter()
+            .map(|r| Mat3A::from(r - Mat3::IDENTITY))
+            .collect();
+        (moves, turns)
+    }
+
     /// The part of a bind that depends on the tool alone.
     pub(crate) fn bind_setup(&self) -> Result<CurveSetup> {
         let evaluator = CurveEvaluator::new(self.basis, self.rest.len(), "curve tool")?;
@@ -488,39 +507,17 @@ impl Deformer for CurveTool {
 
     fn deform(&self, bind: &CurveBind, positions: &[Vec3], active: &[u32], out: &mut [Vec3]) {
         let p = bind.evaluator.degree();
-        let stride = 2 * p + 1;
-        // In SIMD vectors (`Vec3A`, `Mat3A`): the same component-wise products and sums as
-        // `Vec3` and `Mat3`, so the same bits, a vector operation for three.
-        let moves: Vec<Vec3A> = self
-            .deformed
-            .iter()
-            .zip(&self.rest)
-            .map(|(q, p)| Vec3A::from(*q - *p))
-            .collect();
-        let turns: Vec<Mat3A> = self
-            .segment_rotations()
-            .into_iter()
-            .map(|r| Mat3A::from(r - Mat3::IDENTITY))
-            .collect();
-        for (o, &i) in out.iter_mut().zip(active) {
-            let Some(&v) = bind.slot.get(i as usize).filter(|&&s| s != u32::MAX) else {
-                // Not bound (not active when the layer bound): it stays.
-                *o = positions[i as usize];
-                continue;
-            };
-            let v = v as usize;
-            let f = bind.firsts[v] as usize;
-            let w = &bind.weights[v * stride..(v + 1) * stride];
-            let mut d = Vec3A::ZERO;
-            for k in 0..=p {
-                d += moves[f + k] * w[k];
-            }
-            let mut turn = Mat3A::ZERO;
-            for k in 0..p {
-                turn += turns[f + k] * w[p + 1 + k];
-            }
-            let x = Vec3A::from(positions[i as usize]);
-            *o = Vec3::from(x + d + turn * Vec3A::from(bind.offsets[v]));
+        let (moves, turns) = self.moves_and_turns();
+        // The common degrees with the loops' counts known, so that they unroll and their
+        // bounds checks go (the Add menu's Bézier curve has degree 4, its B-spline 3).
+        let (m, t) = (&moves[..], &turns[..]);
+        match p {
+            1 => deform_each(1, bind, m, t, positions, active, out),
+            2 => deform_each(2, bind, m, t, positions, active, out),
+            3 => deform_each(3, bind, m, t, positions, active, out),
+            4 => deform_each(4, bind, m, t, positions, active, out),
+            5 => deform_each(5, bind, m, t, positions, active, out),
+            _ => deform_each(p, bind, m, t, positions, active, out),
         }
     }
 
@@ -542,6 +539,45 @@ impl Deformer for CurveTool {
 
     fn same_rest_state(&self, other: &Self) -> bool {
         self.basis == other.basis && self.rest == other.rest
+    }
+}
+
+/// [`CurveTool::deform`] of the `active` vertices at degree `p`, given each control point's
+/// move `moves` (`Qᵢ − Pᵢ`) and each segment's turn `turns` (`Rᵢ − I`):
+/// `x + Σₖ wₖ (Q − P)_{f+k} + (Σₖ w_{p+1+k} (R − I)_{f+k}) o` with the vertex's first index
+/// `f`, weights `w` and offset `o`. Inlined into each degree's call so that the loops'
+/// counts are constants.
+#[inline(always)]
+fn deform_each(
+    p: usize,
+    bind: &CurveBind,
+    moves: &[Vec3A],
+    turns: &[Mat3A],
+    positions: &[Vec3],
+    active: &[u32],
+    out: &mut [Vec3],
+) {
+    let stride = 2 * p + 1;
+    for (o, &i) in out.iter_mut().zip(active) {
+        let Some(&v) = bind.slot.get(i as usize).filter(|&&s| s != u32::MAX) else {
+            // Not bound (not active when the layer bound): it stays.
+            *o = positions[i as usize];
+            continue;
+        };
+        let v = v as usize;
+        let f = bind.firsts[v] as usize;
+        let w = &bind.weights[v * stride..(v + 1) * stride];
+        let (moves, turns) = (&moves[f..=f + p], &turns[f..f + p]);
+        let mut d = Vec3A::ZERO;
+        for k in 0..=p {
+            d += moves[k] * w[k];
+        }
+        let mut turn = Mat3A::ZERO;
+        for k in 0..p {
+            turn += turns[k] * w[p + 1 + k];
+        }
+        let x = Vec3A::from(positions[i as usize]);
+        *o = Vec3::from(x + d + turn * Vec3A::from(bind.offsets[v]));
     }
 }
 
@@ -592,6 +628,56 @@ pub(crate) mod tests {
             }
         }
         v
+    }
+
+    /// The degrees whose loops `deform` unrolls (1 to 5) give the bits of the general loop
+    /// (the degree hidden from the compiler), and so does a degree past them.
+    #[test]
+    fn unrolled_degrees_give_the_general_loops_bits() {
+        let pts = cloud();
+        let active: Vec<u32> = (0..pts.len() as u32).collect();
+        let topo = Topology {
+            weld: vec![],
+            representative: vec![],
+            triangles: vec![],
+        };
+        let bases = [1, 2, 3, 4, 5, 6]
+            .map(|degree| CurveBasis::BSpline { degree })
+            .into_iter()
+            .chain([CurveBasis::Bezier]);
+        for basis in bases {
+            let rest = straight(8, 1.0);
+            let deformed: Vec<Vec3> = rest
+                .iter()
+                .enumerate()
+                .map(|(i, p)| *p + Vec3::new(0.0, 0.1 * (i as f32).sin(), 0.07 * i as f32))
+                .collect();
+            let tool = CurveTool {
+                basis,
+                rest,
+                deformed,
+            };
+            let input = BindInput {
+                positions: &pts,
+                topology: &topo,
+                active: &active,
+            };
+            let bind = tool.bind(&input).unwrap();
+            let mut unrolled = vec![Vec3::ZERO; pts.len()];
+            tool.deform(&bind, &pts, &active, &mut unrolled);
+            let (moves, turns) = tool.moves_and_turns();
+            let mut general = vec![Vec3::ZERO; pts.len()];
+            let p = std::hint::black_box(bind.evaluator.degree());
+            deform_each(p, &bind, &moves, &turns, &pts, &active, &mut general);
+            let bits = |v: &[Vec3]| -> Vec<[u32; 3]> {
+                v.iter().map(|x| x.to_array().map(f32::to_bits)).collect()
+            };
+            assert_eq!(bits(&unrolled), bits(&general), "{basis:?}");
+            assert!(
+                unrolled.iter().zip(&pts).any(|(a, b)| a != b),
+                "{basis:?} moves"
+            );
+        }
     }
 
     #[test]

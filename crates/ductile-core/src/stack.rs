@@ -343,9 +343,11 @@ impl LayerBinding {
 
 /// [`LayerBinding::blend`] for the vertices of `mask`, `out` in mask order.
 fn blend_mask(layer: &Layer, mask: &Mask, out: &[Vec3], positions: &mut [Vec3]) {
-    let weights = &mask.weights;
+    // Slices of the indices' length, so that `k` needs no bounds check.
+    let n = mask.indices.len();
+    let (weights, out, w) = (&mask.weights[..n], &out[..n], layer.weight);
     for_each_at(positions, &mask.indices, |k, p| {
-        *p = blend_one(*p, out[k], weights[k] * layer.weight);
+        *p = blend_one(*p, out[k], weights[k] * w);
     });
 }
 
