@@ -590,21 +590,30 @@ pub(crate) mod tests {
     /// Validates, binds on `pts` (all active, no topology) and deforms them.
     pub(crate) fn run<T: Deformer>(tool: &T, pts: &[Vec3]) -> Vec<Vec3> {
         tool.validate("t").unwrap();
+        deform_all(tool, &bind_all(tool, pts), pts)
+    }
+
+    /// `tool`'s bind on `pts`, all active, without topology.
+    fn bind_all<T: Deformer>(tool: &T, pts: &[Vec3]) -> T::Bind {
         let topo = Topology {
             weld: vec![],
             representative: vec![],
             triangles: vec![],
         };
         let active: Vec<u32> = (0..pts.len() as u32).collect();
-        let bind = tool
-            .bind(&BindInput {
-                positions: pts,
-                topology: &topo,
-                active: &active,
-            })
-            .unwrap();
+        tool.bind(&BindInput {
+            positions: pts,
+            topology: &topo,
+            active: &active,
+        })
+        .unwrap()
+    }
+
+    /// Every point of `pts` deformed by `tool` with `bind` (a [`bind_all`] on them).
+    fn deform_all<T: Deformer>(tool: &T, bind: &T::Bind, pts: &[Vec3]) -> Vec<Vec3> {
+        let active: Vec<u32> = (0..pts.len() as u32).collect();
         let mut out = vec![Vec3::ZERO; pts.len()];
-        tool.deform(&bind, pts, &active, &mut out);
+        tool.deform(bind, pts, &active, &mut out);
         out
     }
 
@@ -636,11 +645,6 @@ pub(crate) mod tests {
     fn unrolled_degrees_give_the_general_loops_bits() {
         let pts = cloud();
         let active: Vec<u32> = (0..pts.len() as u32).collect();
-        let topo = Topology {
-            weld: vec![],
-            representative: vec![],
-            triangles: vec![],
-        };
         let bases = [1, 2, 3, 4, 5, 6]
             .map(|degree| CurveBasis::BSpline { degree })
             .into_iter()
@@ -657,14 +661,8 @@ pub(crate) mod tests {
                 rest,
                 deformed,
             };
-            let input = BindInput {
-                positions: &pts,
-                topology: &topo,
-                active: &active,
-            };
-            let bind = tool.bind(&input).unwrap();
-            let mut unrolled = vec![Vec3::ZERO; pts.len()];
-            tool.deform(&bind, &pts, &active, &mut unrolled);
+            let bind = bind_all(&tool, &pts);
+            let unrolled = deform_all(&tool, &bind, &pts);
             let (moves, turns) = tool.moves_and_turns();
             let mut general = vec![Vec3::ZERO; pts.len()];
             let p = std::hint::black_box(bind.evaluator.degree());
@@ -914,20 +912,8 @@ pub(crate) mod tests {
         };
         let kv = KnotVector::clamped_uniform(3, 8).unwrap();
         let (lo, hi) = (kv.knots()[moved], kv.knots()[moved + 4]);
-        let topo = Topology {
-            weld: vec![],
-            representative: vec![],
-            triangles: vec![],
-        };
-        let active: Vec<u32> = (0..pts.len() as u32).collect();
-        let input = BindInput {
-            positions: &pts,
-            topology: &topo,
-            active: &active,
-        };
-        let bind = tool.bind(&input).unwrap();
-        let mut out = vec![Vec3::ZERO; pts.len()];
-        tool.deform(&bind, &pts, &active, &mut out);
+        let bind = bind_all(&tool, &pts);
+        let out = deform_all(&tool, &bind, &pts);
         let (mut inside_moved, mut outside) = (0, 0);
         for (k, (x, o)) in pts.iter().zip(&out).enumerate() {
             let t = bind.parameter(k as u32).unwrap();
