@@ -288,6 +288,22 @@ fn weigh<S: Simd>(
         let Some(weights) = ops.weights(influence, v) else {
             continue;
         };
+        if len == n && ops.all(ops.gt(weights, ops.splat(0.0))) {
+            // Every lane positive (a block inside a volume, or outside an inverted one):
+            // the block is appended whole.
+            store::<S>(&mut scratch.weights[count..count + n], weights);
+            let indices = &mut scratch.indices[count..count + n];
+            match ids {
+                Ids::Range(..) => {
+                    for (l, i) in indices.iter_mut().enumerate() {
+                        *i = (first + b + l) as u32;
+                    }
+                }
+                Ids::List(ids) => indices.copy_from_slice(&ids[b..b + n]),
+            }
+            count += n;
+            continue;
+        }
         store::<S>(&mut w[..n], weights);
         // The positive lanes, packed after those before without a branch per lane: every
         // lane is written at the end, and the end moves past the positive ones.
