@@ -300,6 +300,7 @@ impl Bases {
 /// `(S, S_u, S_v)` of a sparse net given as its non-zero entries `(i, j, P_ij)` in
 /// increasing `i + n_u·j` order: the same sums as [`eval_weights`] over the full net, in
 /// the same order, without the zero terms (so the same bits).
+#[inline(always)]
 fn eval_sparse(entries: &[(usize, usize, Vec3)], b: Weights<'_>) -> [Vec3; 3] {
     let mut r = [Vec3::ZERO; 3];
     for &(ci, cj, p) in entries {
@@ -316,6 +317,7 @@ fn eval_sparse(entries: &[(usize, usize, Vec3)], b: Weights<'_>) -> [Vec3; 3] {
 }
 
 /// `(S, S_u, S_v)` of a control net: `Σᵢⱼ P_ij (NᵢNⱼ, N'ᵢNⱼ, NᵢN'ⱼ)`.
+#[inline(always)]
 fn eval_weights(net: &[Vec3], n_u: usize, b: Weights<'_>) -> [Vec3; 3] {
     let mut r = [Vec3::ZERO; 3];
     for j in 0..b.nv.len() {
@@ -327,6 +329,49 @@ fn eval_weights(net: &[Vec3], n_u: usize, b: Weights<'_>) -> [Vec3; 3] {
         }
     }
     r
+}
+
+/// The moved net's offsets from the rest net that deform sums: the non-zero entries (a drag
+/// moves few control points) or the whole net with its row length `n_u`.
+#[derive(Debug, Clone, Copy)]
+enum Sums<'a> {
+    Sparse(&'a [(usize, usize, Vec3)]),
+    Dense(&'a [Vec3], usize),
+}
+
+/// The deformed position of bound point `b` at `x`, with its rest frame and its bases `bs`:
+/// `x + D + (H_z N′ − N) u₃` (`S′ − S`'s value and derivatives from `sums`, the height
+/// surface from `heights` and its row length where a height is edited).
+#[inline(always)]
+fn deformed_point(
+    x: Vec3,
+    b: &Bound,
+    frame: &RestFrame,
+    bs: Weights<'_>,
+    sums: Sums<'_>,
+    heights: Option<(&[f32], usize)>,
+) -> Vec3 {
+    let d = match sums {
+        Sums::Sparse(entries) => eval_sparse(entries, bs),
+        Sums::Dense(delta, n_u) => eval_weights(delta, n_u, bs),
+    };
+    // The rest unit normal `S_u × S_v / |S_u × S_v|`, computed once at bind.
+    let n_rest = frame.normal;
+    // A collapsed moved surface keeps the rest normal there.
+    let n_new = (frame.du + d[1])
+        .cross(frame.dv + d[2])
+        .normalize_or(n_rest);
+    // H_z = 1 + Σ (h_ij − 1) Nᵢ Nⱼ (partition of unity), exactly 1 at rest.
+    // (Skipped when no height is edited: every term is then 0.)
+    let mut h = 1.0;
+    if let Some((heights, n_u)) = heights {
+        for (j, &nv) in bs.nv.iter().enumerate() {
+            for (k, &nu) in bs.nu.iter().enumerate() {
+                h += (heights[bs.su + k + n_u * (bs.sv + j)] - 1.0) * nu * nv;
+            }
+        }
+    }
+    x + d[0] + (n_new * h - n_rest) * b.u3
 }
 
 /// One bound point: its surface coordinates and the first non-zero basis functions there
@@ -808,7 +853,22 @@ impl Deformer for ShapeSurfaceTool {
             .filter(|(_, d)| **d != Vec3::ZERO)
             .map(|(k, d)| (k % n_u, k / n_u, *d))
             .collect();
-        let sparse = 2 * moved_entries.len() < (pu + 1) * (pv + 1);
+        let sums = if 2 * moved_entries.len() < (pu + 1) * (pv + 1) {
+            Sums::Sparse(&moved_entries)
+        } else {
+            Sums::Dense(&delta, n_u)
+        };
+        let heights = (!self.heights.is_empty()).then_some((&heights[..], n_u));
+        // Bicubic bases from power-form pieces (the Add menu's surfaces): the four vectors
+        // of `piece_bases_into` kept in registers, so that every sum below has a length
+        // known to the compiler (same operations, same bits).
+        let bicubic = match &bind.bases {
+            BoundBases::Pieces(pieces) if (pu, pv) == (3, 3) => match &**pieces {
+                [Some(a), Some(b)] => Some((a, b)),
+                _ => None,
+            },
+            _ => None,
+        };
         let mut scratch = [0.0; 4 * (MAX_DEGREE + 1)];
         for (o, &i) in out.iter_mut().zip(active) {
             let x = positions[i as usize];
@@ -820,33 +880,38 @@ impl Deformer for ShapeSurfaceTool {
                 *o = x;
                 continue;
             };
-            let bs = bind.weights_of(k, b, &mut scratch);
             let frame = match &bind.frames {
                 RestFrames::Plane(f) => f,
                 RestFrames::PerPoint(f) => &f[k],
             };
-            let d = if sparse {
-                eval_sparse(&moved_entries, bs)
-            } else {
-                eval_weights(&delta, n_u, bs)
-            };
-            // The rest unit normal `S_u × S_v / |S_u × S_v|`, computed once at bind.
-            let n_rest = frame.normal;
-            // A collapsed moved surface keeps the rest normal there.
-            let n_new = (frame.du + d[1])
-                .cross(frame.dv + d[2])
-                .normalize_or(n_rest);
-            // H_z = 1 + Σ (h_ij − 1) Nᵢ Nⱼ (partition of unity), exactly 1 at rest.
-            // (Skipped when no height is edited: every term is then 0.)
-            let mut h = 1.0;
-            if !self.heights.is_empty() {
-                for j in 0..=pv {
-                    for k in 0..=pu {
-                        h += (heights[bs.su + k + n_u * (bs.sv + j)] - 1.0) * bs.nu[k] * bs.nv[j];
-                    }
+            let four = bicubic.and_then(|(a, c)| {
+                Some((
+                    a.values_and_derivatives4(b.uv.0)?,
+                    c.values_and_derivatives4(b.uv.1)?,
+                ))
+            });
+            *o = match four {
+                Some(((_, nu, du), (_, nv, dv))) => {
+                    let [nu, du, nv, dv] = [nu, du, nv, dv].map(|v| v.to_array());
+                    let bs = Weights {
+                        nu: &nu,
+                        du: &du,
+                        nv: &nv,
+                        dv: &dv,
+                        su: b.span.0 as usize,
+                        sv: b.span.1 as usize,
+                    };
+                    deformed_point(x, b, frame, bs, sums, heights)
                 }
-            }
-            *o = x + d[0] + (n_new * h - n_rest) * b.u3;
+                None => deformed_point(
+                    x,
+                    b,
+                    frame,
+                    bind.weights_of(k, b, &mut scratch),
+                    sums,
+                    heights,
+                ),
+            };
         }
     }
 
