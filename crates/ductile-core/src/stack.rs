@@ -393,7 +393,7 @@ fn blend_runs(positions: &mut [Vec3], indices: &[u32], out: &[Vec3], weights: &[
                 let p: &mut [f32] = bytemuck::cast_slice_mut(run);
                 let d: &[f32] = bytemuck::cast_slice(out);
                 for ((p, &d), &wk) in p.iter_mut().zip(d).zip(&w3) {
-                    *p = if wk == 1.0 { d } else { *p + (d - *p) * wk };
+                    *p = blend_one(*p, d, wk);
                 }
             }
             _ => {
@@ -503,9 +503,17 @@ pub struct Recorded {
     pub splits: Option<Vec<EdgePoint>>,
 }
 
-/// The blend of one vertex: `p + w · (d − p)`, exactly `d` when `w = 1`.
+/// The blend of one vertex: `p + w · (d − p)`, exactly `d` when `w = 1`. Generic so that a
+/// run of vertices can be blended a coordinate at a time (`f32`, [`blend_runs`]) with the
+/// very operations of a `Vec3` (glam's are per coordinate).
 #[inline]
-fn blend_one(p: Vec3, d: Vec3, w: f32) -> Vec3 {
+fn blend_one<T>(p: T, d: T, w: f32) -> T
+where
+    T: Copy
+        + std::ops::Add<Output = T>
+        + std::ops::Sub<Output = T>
+        + std::ops::Mul<f32, Output = T>,
+{
     if w == 1.0 { d } else { p + (d - p) * w }
 }
 

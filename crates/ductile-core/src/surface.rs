@@ -862,12 +862,13 @@ impl Deformer for ShapeSurfaceTool {
         // Bicubic bases from power-form pieces (the Add menu's surfaces): the four vectors
         // of `piece_bases_into` kept in registers, so that every sum below has a length
         // known to the compiler (same operations, same bits).
-        let bicubic = match &bind.bases {
-            BoundBases::Pieces(pieces) if (pu, pv) == (3, 3) => match &**pieces {
-                [Some(a), Some(b)] => Some((a, b)),
-                _ => None,
-            },
-            _ => None,
+        let bicubic = if (pu, pv) == (3, 3)
+            && let BoundBases::Pieces(pieces) = &bind.bases
+            && let [Some(a), Some(b)] = &**pieces
+        {
+            Some((a, b))
+        } else {
+            None
         };
         let mut scratch = [0.0; 4 * (MAX_DEGREE + 1)];
         for (o, &i) in out.iter_mut().zip(active) {
