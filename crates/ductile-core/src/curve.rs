@@ -27,7 +27,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all, bernstein_all_with_derivative};
 use crate::chunks::{BIND_CHUNK, Fresh, Reuse, Slotted, bind_slots, zeroed};
-use crate::curve_pieces::{Closest, CurvePieces};
+use crate::curve_lanes::BoundPoints;
+use crate::curve_pieces::CurvePieces;
 use crate::error::{CoreError, Result, check_finite_vec3};
 use crate::frames::PolylineIndex;
 use crate::tool::{BindInput, Deformer};
@@ -437,36 +438,38 @@ impl CurveTool {
                         weights[j * stride..(j + 1) * stride]
                             .copy_from_slice(&old.weights[s * stride..(s + 1) * stride]);
                     });
-                let mut found = vec![(Closest::default(), 0.0); xs.len()];
-                pieces.closest_each(&xs, &mut found);
                 match &fresh {
                     // Nothing reused in this chunk (a first bind, say): the answers go
                     // straight to it, in order.
                     Fresh::Every => {
                         debug_assert_eq!(xs.len(), params.len(), "every slot is a query");
-                        pieces.weights_each(&found, weights);
-                        for ((((p, o), f), x), (c, _)) in params
-                            .iter_mut()
-                            .zip(offsets.iter_mut())
-                            .zip(firsts.iter_mut())
-                            .zip(xs)
-                            .zip(found)
-                        {
-                            *p = c.t;
-                            *o = x - c.point;
-                            *f = pieces.first(c.piece) as u32;
-                        }
+                        pieces.bind_each(
+                            &xs,
+                            BoundPoints {
+                                params,
+                                offsets,
+                                firsts,
+                                weights,
+                            },
+                        );
                     }
                     Fresh::Listed(slots) => {
-                        let mut fresh_weights = vec![0.0; xs.len() * stride];
-                        pieces.weights_each(&found, &mut fresh_weights);
-                        for (&j, w) in slots.iter().zip(fresh_weights.chunks_exact(stride)) {
-                            weights[j * stride..(j + 1) * stride].copy_from_slice(w);
-                        }
-                        for ((&j, x), (c, _)) in slots.iter().zip(xs).zip(found) {
-                            params[j] = c.t;
-                            offsets[j] = x - c.point;
-                            firsts[j] = pieces.first(c.piece) as u32;
+                        let n = xs.len();
+                        let (mut p, mut o, mut f) = (vec![0.0; n], vec![Vec3::ZERO; n], vec![0; n]);
+                        let mut w = vec![0.0; n * stride];
+                        pieces.bind_each(
+                            &xs,
+                            BoundPoints {
+                                params: &mut p,
+                                offsets: &mut o,
+                                firsts: &mut f,
+                                weights: &mut w,
+                            },
+                        );
+                        for (k, &j) in slots.iter().enumerate() {
+                            (params[j], offsets[j], firsts[j]) = (p[k], o[k], f[k]);
+                            weights[j * stride..(j + 1) * stride]
+                                .copy_from_slice(&w[k * stride..(k + 1) * stride]);
                         }
                     }
                 }

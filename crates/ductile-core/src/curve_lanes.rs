@@ -19,6 +19,7 @@ use glam::Vec3;
 use crate::curve_pieces::{Closest, CurvePieces, REFINE_STEPS};
 use crate::frames::BOUND_BATCH;
 use crate::lane::{LANES, Lane, Lanes3, Mask, copy_prefix};
+use crate::polyline_lanes::Bounds;
 
 #[cfg(target_arch = "x86_64")]
 mod steps;
@@ -52,22 +53,94 @@ impl CurvePieces {
         });
     }
 
-    /// [`CurvePieces::weights`] of each closest point of `found`, written to `out` (`2p + 1`
-    /// values per point): the same bits, every function of a point at once.
+    /// What a curve bind keeps of the closest curve point of each point `x` of `xs`
+    /// ([`CurvePieces::closest`]), written to `out`: its parameter `t`, the offset `x − C`,
+    /// the first control point of its piece ([`CurvePieces::first`]) and its `2p + 1`
+    /// weights ([`CurvePieces::weights`]). The same bits as those functions, a lane group at
+    /// a time, each answer written where it is found instead of going through a
+    /// [`Closest`] (`docs/performance.md`, thirty-first session).
     ///
     /// # Panics
-    /// When `out` does not hold `2p + 1` values per point.
-    pub fn weights_each(&self, found: &[(Closest, f32)], out: &mut [f32]) {
-        assert_eq!(
-            out.len(),
-            found.len() * (2 * self.degree + 1),
-            "2p + 1 weights per point"
+    /// When `out` does not hold one entry (and `2p + 1` weights) per point.
+    pub(crate) fn bind_each(&self, xs: &[Vec3], out: BoundPoints<'_>) {
+        let n = xs.len();
+        assert!(
+            out.params.len() == n
+                && out.offsets.len() == n
+                && out.firsts.len() == n
+                && out.weights.len() == n * (2 * self.degree + 1),
+            "one entry per point"
         );
-        pulp::Arch::new().dispatch(WeightsEach {
+        self.bind_each_with(xs, out, Permute::detect());
+    }
+
+    /// [`CurvePieces::bind_each`] with the steps in registers where `permute` has them, on
+    /// the lanes otherwise.
+    fn bind_each_with(&self, xs: &[Vec3], out: BoundPoints<'_>, permute: Permute) {
+        pulp::Arch::new().dispatch(BindEach {
             pieces: self,
-            found,
+            xs,
             out,
+            permute,
         });
+    }
+
+    /// [`CurvePieces::weights`] of piece `k` at `u`, written to `out` (`2p + 1` values, `p`
+    /// the degree):
+    /// every function at once on the lanes where the degree allows (`2p + 1 ≤ 16`). Row `i`
+    /// of the piece's table ([`CurvePieces::weight_rows`]) holds coefficient `i` of every
+    /// function, so Horner's rule runs on all of them at once, from zero, `acc · u + cᵢ` as
+    /// the scalar `horner` does. A segment function has one coefficient fewer: its lane
+    /// starts with `0 · u + 0 = +0`, the scalar start (a NaN or infinite `u` gives NaN either
+    /// way). A point at the curve's end takes the table of exact end weights, as the scalar
+    /// form does.
+    #[inline(always)]
+    fn weights_lanes(&self, p: usize, k: usize, u: f32, out: &mut [f32]) {
+        debug_assert_eq!(p, self.degree);
+        if self.weight_rows.is_empty() {
+            self.weights(k, u, out);
+            return;
+        }
+        if u >= 1.0 && k + 1 == self.count {
+            out.copy_from_slice(&self.end);
+            return;
+        }
+        let u = Lane::splat(u);
+        let mut acc = Lane::ZERO;
+        for &row in self.weight_rows[k * (p + 1)..(k + 1) * (p + 1)]
+            .iter()
+            .rev()
+        {
+            acc = acc * u + row;
+        }
+        copy_prefix(out, acc.as_array());
+    }
+
+    /// The closest points of the lane group `x` (module documentation): each lane's piece
+    /// and local parameter (`f32`), point and squared distance, and which lanes had a finite
+    /// seed (the others must be answered by [`CurvePieces::closest`]). `p` is the degree
+    /// (a literal where the caller names it, so that the steps' loops have known lengths).
+    #[inline(always)]
+    fn closest_group(&self, p: usize, x: &Lanes3, bounds: &mut Bounds, permute: Permute) -> Group {
+        let seeds = self.index.closest_lanes(x, bounds);
+        // With AVX2 the steps run on registers, else on the lanes (the same bits).
+        #[cfg(target_arch = "x86_64")]
+        let (k, u, c, d2) = match permute.v3 {
+            Some(v3) => self.closest_registers(v3, p, x, seeds.segment, seeds.fraction),
+            None => self.closest_lanes(x, seeds.segment, seeds.fraction),
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let (k, u, c, d2) = {
+            let _ = (p, permute);
+            self.closest_lanes(x, seeds.segment, seeds.fraction)
+        };
+        Group {
+            k,
+            u,
+            c,
+            d2,
+            finite: seeds.d2.is_finite(),
+        }
     }
 
     /// `(C(u), dC/du)` in each lane, on each lane's piece `k` (Horner's rule, as
@@ -266,74 +339,121 @@ impl pulp::WithSimd for ClosestEach<'_> {
         }
         let mut bounds = [Lane::ZERO; BOUND_BATCH];
         for (xs, out) in self.xs.chunks(LANES).zip(self.out.chunks_mut(LANES)) {
-            let x = Lanes3::load(xs);
-            let seeds = pieces.index.closest_lanes(&x, &mut bounds);
-            let finite = seeds.d2.is_finite();
-            // With AVX2 the steps run on registers, else on the lanes (the same bits).
-            #[cfg(target_arch = "x86_64")]
-            let (k, u, c, d2) = match self.permute.v3 {
-                Some(v3) => pieces.closest_registers(v3, &x, seeds.segment, seeds.fraction),
-                None => pieces.closest_lanes(&x, seeds.segment, seeds.fraction),
-            };
-            #[cfg(not(target_arch = "x86_64"))]
-            let (k, u, c, d2) = pieces.closest_lanes(&x, seeds.segment, seeds.fraction);
+            let g =
+                pieces.closest_group(pieces.degree, &Lanes3::load(xs), &mut bounds, self.permute);
             for (j, o) in out.iter_mut().enumerate() {
-                if !finite.lane(j) {
+                if !g.finite.lane(j) {
                     *o = pieces.closest(xs[j]);
                     continue;
                 }
-                let (piece, u) = (k.as_array()[j] as usize, u.as_array()[j]);
-                let t = ((piece as f64 + f64::from(u)) / pieces.count as f64) as f32;
-                let point = c.lane(j);
-                *o = (Closest { piece, u, t, point }, d2.as_array()[j]);
+                let (piece, u) = (g.k.as_array()[j] as usize, g.u.as_array()[j]);
+                let t = pieces.param(piece, u);
+                let point = g.c.lane(j);
+                *o = (Closest { piece, u, t, point }, g.d2.as_array()[j]);
             }
         }
     }
 }
 
-/// [`CurvePieces::weights_each`]'s kernel: one point at a time, its `2p + 1` basis functions
-/// in the lanes. Row `i` of the piece's table ([`CurvePieces::weight_rows`]) holds
-/// coefficient `i` of every function, so Horner's rule runs on all of them at once, from zero,
-/// `acc · u + cᵢ` as the scalar `horner` does. A segment function has one coefficient fewer:
-/// its lane starts with `0 · u + 0 = +0`, the scalar start (a NaN or infinite `u` gives NaN
-/// either way).
-/// A point at the curve's end takes the table of exact end weights, as the scalar form does;
-/// a degree too high for the lanes goes through the scalar form.
-struct WeightsEach<'a> {
-    pieces: &'a CurvePieces,
-    found: &'a [(Closest, f32)],
-    out: &'a mut [f32],
+/// A lane group's closest points ([`CurvePieces::closest_group`]).
+struct Group {
+    /// Each lane's piece, an `f32` integer.
+    k: Lane,
+    /// Each lane's local parameter in its piece.
+    u: Lane,
+    /// Each lane's curve point.
+    c: Lanes3,
+    /// Each lane's squared distance.
+    d2: Lane,
+    /// The lanes whose seed was finite (the others answered by the scalar search).
+    finite: Mask,
 }
 
-impl pulp::WithSimd for WeightsEach<'_> {
+/// Where [`CurvePieces::bind_each`] writes: one entry per point, `2p + 1` weights per point.
+pub(crate) struct BoundPoints<'a> {
+    /// Each point's curve parameter `t` ([`Closest::t`]).
+    pub(crate) params: &'a mut [f32],
+    /// Each point less its closest curve point.
+    pub(crate) offsets: &'a mut [Vec3],
+    /// The first control point of each closest point's piece.
+    pub(crate) firsts: &'a mut [u32],
+    /// Each point's `2p + 1` weights.
+    pub(crate) weights: &'a mut [f32],
+}
+
+/// [`CurvePieces::bind_each`]'s kernel.
+struct BindEach<'a> {
+    pieces: &'a CurvePieces,
+    xs: &'a [Vec3],
+    out: BoundPoints<'a>,
+    /// Whether the steps run in registers (x86-64 only; elsewhere on the lanes).
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    permute: Permute,
+}
+
+impl BindEach<'_> {
+    /// The kernel for degree `p` (the pieces' own: a literal where the caller names a
+    /// common degree, so that the weights' loops have known lengths).
+    #[inline(always)]
+    fn run(self, p: usize) {
+        let Self {
+            pieces,
+            xs,
+            out,
+            permute,
+        } = self;
+        debug_assert_eq!(p, pieces.degree);
+        let stride = 2 * p + 1;
+        let BoundPoints {
+            params,
+            offsets,
+            firsts,
+            weights,
+        } = out;
+        let mut bounds = [Lane::ZERO; BOUND_BATCH];
+        let lanes = pieces.index.has_lanes();
+        for ((((xs, params), offsets), firsts), weights) in xs
+            .chunks(LANES)
+            .zip(params.chunks_mut(LANES))
+            .zip(offsets.chunks_mut(LANES))
+            .zip(firsts.chunks_mut(LANES))
+            .zip(weights.chunks_mut(LANES * stride))
+        {
+            // (No closure: it would not inherit the kernel's target features.)
+            let g = if lanes {
+                Some(pieces.closest_group(p, &Lanes3::load(xs), &mut bounds, permute))
+            } else {
+                None
+            };
+            for (j, &x) in xs.iter().enumerate() {
+                let (k, u, point) = match &g {
+                    Some(g) if g.finite.lane(j) => {
+                        (g.k.as_array()[j] as usize, g.u.as_array()[j], g.c.lane(j))
+                    }
+                    _ => {
+                        let (c, _) = pieces.closest(x);
+                        (c.piece, c.u, c.point)
+                    }
+                };
+                params[j] = pieces.param(k, u);
+                offsets[j] = x - point;
+                firsts[j] = pieces.firsts[k];
+                pieces.weights_lanes(p, k, u, &mut weights[j * stride..(j + 1) * stride]);
+            }
+        }
+    }
+}
+
+impl pulp::WithSimd for BindEach<'_> {
     type Output = ();
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) {
-        let pieces = self.pieces;
-        let p = pieces.degree;
-        let stride = 2 * p + 1;
-        if pieces.weight_rows.is_empty() {
-            for ((c, _), o) in self.found.iter().zip(self.out.chunks_exact_mut(stride)) {
-                pieces.weights(c.piece, c.u, o);
-            }
-            return;
-        }
-        for ((c, _), o) in self.found.iter().zip(self.out.chunks_exact_mut(stride)) {
-            let k = c.piece;
-            if c.u >= 1.0 && k + 1 == pieces.count {
-                o.copy_from_slice(&pieces.end);
-                continue;
-            }
-            let u = Lane::splat(c.u);
-            let mut acc = Lane::ZERO;
-            for &row in pieces.weight_rows[k * (p + 1)..(k + 1) * (p + 1)]
-                .iter()
-                .rev()
-            {
-                acc = acc * u + row;
-            }
-            copy_prefix(o, acc.as_array());
+        // The Add menu's curves: a cubic B-spline and a quartic Bézier.
+        match self.pieces.degree {
+            3 => self.run(3),
+            4 => self.run(4),
+            p => self.run(p),
         }
     }
 }
@@ -369,7 +489,59 @@ mod tests {
             prop_assert_eq!(bits(o), scalar, "x = {}", x);
             prop_assert_eq!(bits(l), scalar, "lanes, x = {}", x);
         }
+        for permute in [Permute::detect(), Permute::NONE] {
+            let got = bound(&pieces, xs, permute);
+            prop_assert_eq!(got, scalar_bound(&pieces, xs));
+        }
         Ok(())
+    }
+
+    /// One point's bind data as bits: `t`, offset, first control point, weights.
+    type BoundBits = (u32, [u32; 3], u32, Vec<u32>);
+
+    /// [`CurvePieces::bind_each`] of `xs` (the steps in registers where `permute` has them).
+    fn bound(pieces: &CurvePieces, xs: &[Vec3], permute: Permute) -> Vec<BoundBits> {
+        let (n, stride) = (xs.len(), 2 * pieces.degree + 1);
+        let (mut params, mut offsets, mut firsts) = (vec![0.0; n], vec![Vec3::ZERO; n], vec![0; n]);
+        let mut weights = vec![0.0; n * stride];
+        let out = BoundPoints {
+            params: &mut params,
+            offsets: &mut offsets,
+            firsts: &mut firsts,
+            weights: &mut weights,
+        };
+        pieces.bind_each_with(xs, out, permute);
+        (0..n)
+            .map(|i| {
+                (
+                    params[i].to_bits(),
+                    offsets[i].to_array().map(f32::to_bits),
+                    firsts[i],
+                    weights[i * stride..(i + 1) * stride]
+                        .iter()
+                        .map(|w| w.to_bits())
+                        .collect(),
+                )
+            })
+            .collect()
+    }
+
+    /// The same from the scalar functions: [`CurvePieces::closest`], then
+    /// [`CurvePieces::first`] and [`CurvePieces::weights`] of its answer.
+    fn scalar_bound(pieces: &CurvePieces, xs: &[Vec3]) -> Vec<BoundBits> {
+        let mut w = vec![0.0; 2 * pieces.degree + 1];
+        xs.iter()
+            .map(|&x| {
+                let (c, _) = pieces.closest(x);
+                pieces.weights(c.piece, c.u, &mut w);
+                (
+                    c.t.to_bits(),
+                    (x - c.point).to_array().map(f32::to_bits),
+                    pieces.first(c.piece) as u32,
+                    w.iter().map(|w| w.to_bits()).collect(),
+                )
+            })
+            .collect()
     }
 
     fn bases() -> Vec<CurveBasis> {
@@ -457,12 +629,12 @@ mod tests {
         }
     }
 
-    /// The lane weights give every closest point the bits of [`CurvePieces::weights`], the
-    /// curve's end included.
+    /// The bind data of points along a curve and past both ends (whose closest points are
+    /// the ends, where the exact end weights apply), and the lane weights of parameters no
+    /// search gives, have the bits of the scalar functions.
     #[test]
     fn lane_weights_have_the_scalar_bits() {
         let ctrl = wiggly();
-        // Points along the curve and past both ends (their closest points are the ends).
         let xs: Vec<Vec3> = (0..1001)
             .map(|i| {
                 let s = i as f32 * 0.011 - 1.5;
@@ -485,11 +657,14 @@ mod tests {
             let ctrl = &ctrl[..n];
             let evaluator = CurveEvaluator::new(basis, ctrl.len(), "test").unwrap();
             let pieces = CurvePieces::new(&evaluator, ctrl);
-            let stride = 2 * pieces.degree + 1;
-            let mut found = vec![(pieces.closest(Vec3::ZERO).0, 0.0); xs.len()];
-            pieces.closest_each(&xs, &mut found);
-            // And parameters no search gives: an inner piece's end, signed zeros, values past
+            let want = scalar_bound(&pieces, &xs);
+            for permute in [Permute::detect(), Permute::NONE] {
+                assert_eq!(bound(&pieces, &xs, permute), want, "{basis:?}, {n} points");
+            }
+            // Parameters no search gives: an inner piece's end, signed zeros, values past
             // the piece, infinities and NaN.
+            let stride = 2 * pieces.degree + 1;
+            let (mut lanes, mut one) = (vec![0.0; stride], vec![0.0; stride]);
             for piece in [0, pieces.count / 2, pieces.count - 1] {
                 for u in [
                     1.0,
@@ -501,28 +676,12 @@ mod tests {
                     f32::NEG_INFINITY,
                     f32::NAN,
                 ] {
-                    let c = Closest {
-                        piece,
-                        u,
-                        ..Closest::default()
-                    };
-                    found.push((c, 0.0));
-                }
-            }
-            let mut lanes = vec![0.0; found.len() * stride];
-            pieces.weights_each(&found, &mut lanes);
-            let mut one = vec![0.0; stride];
-            for (g, group) in found.chunks(LANES).enumerate() {
-                for (j, (c, _)) in group.iter().enumerate() {
-                    let i = g * LANES + j;
-                    pieces.weights(c.piece, c.u, &mut one);
+                    pieces.weights_lanes(pieces.degree, piece, u, &mut lanes);
+                    pieces.weights(piece, u, &mut one);
                     assert_eq!(
-                        lanes[i * stride..(i + 1) * stride]
-                            .iter()
-                            .map(|w| w.to_bits())
-                            .collect::<Vec<_>>(),
+                        lanes.iter().map(|w| w.to_bits()).collect::<Vec<_>>(),
                         one.iter().map(|w| w.to_bits()).collect::<Vec<_>>(),
-                        "{basis:?}, point {i}"
+                        "{basis:?}, piece {piece}, u = {u}"
                     );
                 }
             }

@@ -96,7 +96,7 @@ pub struct CurvePieces {
     /// evaluating them all at once (`curve_lanes.rs`); empty when `2p + 1` passes the lanes.
     pub(crate) weight_rows: Vec<Lane>,
     /// Per piece, the index of its first non-zero point and segment function.
-    firsts: Vec<u32>,
+    pub(crate) firsts: Vec<u32>,
     /// The `2p + 1` weights at the curve's end `t = 1`, exactly as the recurrence gives them
     /// (every function but the last 0): the power form's sum there is only nearly 0.
     pub(crate) end: Vec<f32>,
@@ -321,7 +321,7 @@ impl CurvePieces {
                 break;
             }
         }
-        let t = ((k as f64 + f64::from(u)) / self.count as f64) as f32;
+        let t = self.param(k, u);
         (
             Closest {
                 piece: k,
@@ -331,6 +331,13 @@ impl CurvePieces {
             },
             best,
         )
+    }
+
+    /// The curve parameter `t = (k + u) / m` of local parameter `u` on piece `k` (in `f64`,
+    /// rounded once).
+    #[inline(always)]
+    pub(crate) fn param(&self, k: usize, u: f32) -> f32 {
+        ((k as f64 + f64::from(u)) / self.count as f64) as f32
     }
 
     /// `(k, u)` with the end of an inner piece written as the start of the next one, so that

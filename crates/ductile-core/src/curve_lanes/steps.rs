@@ -80,11 +80,12 @@ fn min(o: Ops<V3>, a: R, b: R) -> R {
 
 impl CurvePieces {
     /// [`CurvePieces::closest_lanes`] in registers: each lane's piece, local parameter,
-    /// point and squared distance, the same bits.
+    /// point and squared distance, the same bits. `p` is the degree.
     #[inline(always)]
     pub(super) fn closest_registers(
         &self,
         v3: V3,
+        p: usize,
         x: &Lanes3,
         seg: Lane,
         frac: Lane,
@@ -95,7 +96,7 @@ impl CurvePieces {
         let infinity = o.splat(f32::INFINITY);
         let last = o.splat((self.count - 1) as f32);
         let (mut k, mut u) = self.settled_registers(o, regs(seg), regs(frac));
-        let (mut c, mut dc) = self.point_and_tangent_registers(o, k, u);
+        let (mut c, mut dc) = self.point_and_tangent_registers(o, p, k, u);
         let mut best = o.length_squared(o.sub3(c, x));
         let mut going: M = o.eq(zero, zero);
         for _ in 0..REFINE_STEPS {
@@ -118,7 +119,7 @@ impl CurvePieces {
                 o.select(above, o.clamp01(o.sub(next, ahead)), next),
             );
             let (kn, un) = self.settled_registers(o, kn, un);
-            let (cn, dn) = self.point_and_tangent_registers(o, kn, un);
+            let (cn, dn) = self.point_and_tangent_registers(o, p, kn, un);
             let d = o.length_squared(o.sub3(cn, x));
             going = o.and(going, o.lt(d, best));
             best = o.select(going, d, best);
@@ -139,10 +140,16 @@ impl CurvePieces {
         (o.select(m, next, k), o.select(m, o.splat(0.0), u))
     }
 
-    /// [`CurvePieces::point_and_tangent_lanes`] in registers.
+    /// [`CurvePieces::point_and_tangent_lanes`] in registers, for degree `p`.
     #[inline(always)]
-    fn point_and_tangent_registers(&self, o: Ops<V3>, k: R, u: R) -> (Block<V3>, Block<V3>) {
-        let p = self.degree;
+    fn point_and_tangent_registers(
+        &self,
+        o: Ops<V3>,
+        p: usize,
+        k: R,
+        u: R,
+    ) -> (Block<V3>, Block<V3>) {
+        debug_assert_eq!(p, self.degree);
         let q = p.max(1);
         let pieces = Pieces::from_registers(o.0, k, self.count);
         let zero = o.splat3(glam::Vec3::ZERO);
