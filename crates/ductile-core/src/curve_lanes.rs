@@ -1,5 +1,6 @@
 //! [`CurvePieces::closest`] for a lane group of points at a time: the closest-point search of
-//! the curve binds, in [`pulp`]'s runtime dispatch.
+//! the curve binds, in [`pulp`]'s runtime dispatch, and the bind's data written straight from
+//! it ([`CurvePieces::bind_each`]).
 //!
 //! The seed is the boundary polyline's closest point (`polyline_lanes.rs`); the Gauss–Newton
 //! steps `u ← u − (C − x)·C' / |C'|²` then run in every lane at once, each lane on its own
