@@ -384,6 +384,30 @@ struct Bound {
     span: (u32, u32),
 }
 
+/// The bound point at `(u, v, u₃)`, its basis values written to `weights` (`2(p_u + 1) +
+/// 2(p_v + 1)` values, or none where deform `evaluated` them from `pieces`). A function the
+/// compiler must inline: as a closure called for each of a bind's points it was a call per
+/// point, about a third of a planar bind's instructions (`docs/performance.md`, thirty-first
+/// session).
+#[inline(always)]
+fn bound(
+    pieces: &[Option<BasisPieces>; 2],
+    knots: &[KnotVector; 2],
+    evaluated: bool,
+    (u, v, u3): (f32, f32, f32),
+    weights: &mut [f32],
+) -> Bound {
+    let (first_u, first_v) = match pieces {
+        [Some(a), Some(b)] if evaluated => (a.first_at(u), b.first_at(v)),
+        _ => piece_bases_into(pieces, knots, u, v, weights),
+    };
+    Bound {
+        uv: (u, v),
+        u3,
+        span: (first_u as u32, first_v as u32),
+    }
+}
+
 /// The rest surface's frame at a bound point.
 #[derive(Debug, Clone, Copy, PartialEq, bytemuck::Zeroable)]
 struct RestFrame {
@@ -626,19 +650,6 @@ impl ShapeSurfaceTool {
         } else {
             2 * (pu + 1) + 2 * (pv + 1)
         };
-        // The bound point at `(u, v, u₃)`, its basis values written to `weights` (`stride`
-        // long: empty where deform evaluates them).
-        let bound = |(u, v, u3): (f32, f32, f32), weights: &mut [f32]| {
-            let (first_u, first_v) = match &**pieces {
-                [Some(a), Some(b)] if evaluated => (a.first_at(u), b.first_at(v)),
-                _ => piece_bases_into(pieces, &knots, u, v, weights),
-            };
-            Bound {
-                uv: (u, v),
-                u3,
-                span: (first_u as u32, first_v as u32),
-            }
-        };
         // The bound point of `x` found by search (a curved rest surface, or a plane whose
         // edges give no positive determinant) with its rest frame, its basis values written
         // to `weights`; `None` (and `weights` untouched) where it does not project.
@@ -660,7 +671,7 @@ impl ShapeSurfaceTool {
                 du: s[1],
                 dv: s[2],
             };
-            Some((bound((u, v, u3), weights), frame))
+            Some((bound(pieces, &knots, evaluated, (u, v, u3), weights), frame))
         };
         // Every active vertex on its own, in parallel chunks, into its slot; a vertex that
         // does not project keeps an unused slot and is marked unbound after.
@@ -734,7 +745,8 @@ impl ShapeSurfaceTool {
                     for (k, p) in found.into_iter().enumerate() {
                         if let Some(p) = p {
                             let j = fresh.slot(k);
-                            points[j] = bound(p, &mut weights[j * stride..(j + 1) * stride]);
+                            let w = &mut weights[j * stride..(j + 1) * stride];
+                            points[j] = bound(pieces, &knots, evaluated, p, w);
                             projects[j] = true;
                         }
                     }
