@@ -86,15 +86,14 @@ impl CurvePieces {
         });
     }
 
-    /// [`CurvePieces::weights`] of piece `k` at `u`, written to `out` (`2p + 1` values, `p`
-    /// the degree):
-    /// every function at once on the lanes where the degree allows (`2p + 1 ≤ 16`). Row `i`
-    /// of the piece's table ([`CurvePieces::weight_rows`]) holds coefficient `i` of every
-    /// function, so Horner's rule runs on all of them at once, from zero, `acc · u + cᵢ` as
-    /// the scalar `horner` does. A segment function has one coefficient fewer: its lane
-    /// starts with `0 · u + 0 = +0`, the scalar start (a NaN or infinite `u` gives NaN either
-    /// way). A point at the curve's end takes the table of exact end weights, as the scalar
-    /// form does.
+    /// [`CurvePieces::weights`] of piece `k` at `u` for degree `p`, written to `out`
+    /// (`2p + 1` values): every function at once on the lanes where the degree allows
+    /// (`2p + 1 ≤ 16`). Row `i` of the piece's table ([`CurvePieces::weight_rows`]) holds
+    /// coefficient `i` of every function, so Horner's rule runs on all of them at once, from
+    /// zero, `acc · u + cᵢ` as the scalar `horner` does. A segment function has one
+    /// coefficient fewer: its lane starts with `0 · u + 0 = +0`, the scalar start (a NaN or
+    /// infinite `u` gives NaN either way). A point at the curve's end takes the table of
+    /// exact end weights, as the scalar form does.
     #[inline(always)]
     fn weights_lanes(&self, p: usize, k: usize, u: f32, out: &mut [f32]) {
         debug_assert_eq!(p, self.degree);

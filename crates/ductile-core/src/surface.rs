@@ -386,9 +386,8 @@ struct Bound {
 
 /// The bound point at `(u, v, u₃)`, its basis values written to `weights` (`2(p_u + 1) +
 /// 2(p_v + 1)` values, or none where deform `evaluated` them from `pieces`). A function the
-/// compiler must inline: as a closure called for each of a bind's points it was a call per
-/// point, about a third of a planar bind's instructions (`docs/performance.md`, thirty-first
-/// session).
+/// compiler must inline: as a closure it stayed a call for each of a bind's points, and a
+/// planar bind took 8 % more instructions (`docs/performance.md`, thirty-first session).
 #[inline(always)]
 fn bound(
     pieces: &[Option<BasisPieces>; 2],
