@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::axial_lanes::{AxisTable, BindArrays};
-use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots, zeroed};
+use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots_in, recycled};
 use crate::curve::{CurveBasis, CurveEvaluator, validate_polygon};
 use crate::error::{CoreError, Result, check_finite};
 use crate::frames::{Frame, PolylineIndex, double_reflection, polyline_tangents};
@@ -334,16 +334,32 @@ impl AxialTool {
         input: &BindInput<'_>,
         previous: Option<Reuse<'_, AxialBind>>,
     ) -> Result<AxialBind> {
+        self.bind_in(input, previous, None)
+    }
+
+    /// [`AxialTool::bind_reusing`] made in the buffers of `spare`, a bind this thread no
+    /// longer needs (every value that is read is written again).
+    pub(crate) fn bind_in(
+        &self,
+        input: &BindInput<'_>,
+        previous: Option<Reuse<'_, AxialBind>>,
+        spare: Option<AxialBind>,
+    ) -> Result<AxialBind> {
         let rest = SampledAxis::new(self.shape, &self.rest, None, "axial tool: rest axis")?;
-        let (slot, active) = bind_slots(input.positions.len(), input.active);
+        let spare = spare.map_or_else(Default::default, |b| {
+            (b.slot, b.segment, b.fraction, b.local, b.base, b.weight)
+        });
+        let (slot, active) = bind_slots_in(spare.0, input.positions.len(), input.active);
         let m = active.len();
+        // A vertex outside the zone keeps the stale values of `spare` but weight 0, and
+        // nothing reads its other values.
         let mut bind = AxialBind {
             slot,
-            segment: zeroed(m),
-            fraction: zeroed(m),
-            local: zeroed(m),
-            base: zeroed(m),
-            weight: zeroed(m),
+            segment: recycled(spare.1, m),
+            fraction: recycled(spare.2, m),
+            local: recycled(spare.3, m),
+            base: recycled(spare.4, m),
+            weight: recycled(spare.5, m),
             rest,
         };
         let index =
@@ -388,6 +404,7 @@ impl AxialTool {
                     let v = fresh.slot(k);
                     let w = ws[k];
                     if w <= 0.0 {
+                        weight[v] = 0.0;
                         continue;
                     }
                     let (l, b) = if done[k] {

@@ -54,6 +54,25 @@ pub fn zeroed<T: bytemuck::Zeroable + Copy + Send + Sync>(n: usize) -> Vec<T> {
     v
 }
 
+/// `spare`, a buffer an earlier bind on this thread no longer needs, made `n` values long
+/// for a bind that writes every value it reads: its stale values kept, zeros added after
+/// them. Without the room for `n`, [`zeroed`]. The blocks of a run of per-vertex layers
+/// (`fused.rs`) bind one block after another on each thread; reusing the buffers of the
+/// block before spares each bind its allocation and its zeros (`docs/performance.md`,
+/// thirty-second session).
+#[must_use]
+pub(crate) fn recycled<T: bytemuck::Zeroable + Copy + Send + Sync>(
+    mut spare: Vec<T>,
+    n: usize,
+) -> Vec<T> {
+    if spare.capacity() < n {
+        return zeroed(n);
+    }
+    spare.truncate(n);
+    spare.resize(n, T::zeroed());
+    spare
+}
+
 /// Whether `indices` is strictly ascending (sorted, each once), as an influence mask's
 /// indices are.
 ///
@@ -89,7 +108,18 @@ fn ascending_below(indices: &[u32], n: usize) -> bool {
 /// where it is already such a list (a mask's indices always are), not a copy of it.
 #[must_use]
 pub fn bind_slots(n: usize, active: &[u32]) -> (Vec<u32>, Cow<'_, [u32]>) {
-    let mut slot = Vec::with_capacity(n);
+    bind_slots_in(Vec::new(), n, active)
+}
+
+/// [`bind_slots`] written into `slot`, a buffer an earlier bind no longer needs (its values
+/// are not read).
+#[must_use]
+pub(crate) fn bind_slots_in(
+    mut slot: Vec<u32>,
+    n: usize,
+    active: &[u32],
+) -> (Vec<u32>, Cow<'_, [u32]>) {
+    slot.clear();
     if n >= PARALLEL_COPY_THRESHOLD {
         (0..n)
             .into_par_iter()

@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE, bernstein_all, bernstein_all_with_derivative};
-use crate::chunks::{BIND_CHUNK, Fresh, Reuse, Slotted, bind_slots, zeroed};
+use crate::chunks::{BIND_CHUNK, Fresh, Reuse, Slotted, bind_slots_in, recycled};
 use crate::curve_lanes::BoundPoints;
 use crate::curve_pieces::CurvePieces;
 use crate::error::{CoreError, Result, check_finite_vec3};
@@ -376,7 +376,7 @@ impl CurveTool {
         input: &BindInput<'_>,
         previous: Option<Reuse<'_, CurveBind>>,
     ) -> Result<CurveBind> {
-        self.bind_set_up(&self.bind_setup()?, input, previous)
+        self.bind_set_up(&self.bind_setup()?, input, previous, None)
     }
 
     /// What [`Deformer::deform`] sums: each control point's move `Qᵢ − Pᵢ` and each
@@ -405,21 +405,28 @@ impl CurveTool {
         Ok(CurveSetup { evaluator, pieces })
     }
 
-    /// [`CurveTool::bind_reusing`] with `setup`, this tool's [`CurveTool::bind_setup`].
+    /// [`CurveTool::bind_reusing`] with `setup`, this tool's [`CurveTool::bind_setup`], made
+    /// in the buffers of `spare`, a bind this thread no longer needs (every value is written
+    /// again).
     pub(crate) fn bind_set_up(
         &self,
         setup: &CurveSetup,
         input: &BindInput<'_>,
         previous: Option<Reuse<'_, CurveBind>>,
+        spare: Option<CurveBind>,
     ) -> Result<CurveBind> {
         let (evaluator, pieces) = (setup.evaluator.clone(), &setup.pieces);
-        let (slot, active) = bind_slots(input.positions.len(), input.active);
+        let spare = spare.map_or_else(Default::default, |b| {
+            (b.slot, b.params, b.offsets, b.firsts, b.weights)
+        });
+        let (slot, active) = bind_slots_in(spare.0, input.positions.len(), input.active);
         let m = active.len();
         let stride = 2 * evaluator.degree() + 1;
-        let mut params = zeroed(m);
-        let mut offsets = zeroed(m);
-        let mut firsts = zeroed(m);
-        let mut weights = zeroed(m * stride);
+        // Every entry is written below: a bind's own vertex, or a reused one's copy.
+        let mut params = recycled(spare.1, m);
+        let mut offsets = recycled(spare.2, m);
+        let mut firsts = recycled(spare.3, m);
+        let mut weights = recycled(spare.4, m * stride);
         let previous = previous.filter(|p| p.bind.evaluator.degree() == evaluator.degree());
         // Every vertex on its own, in parallel chunks (the same bits as one by one): the
         // closest points of a chunk's vertices that are not reused, a lane group at a time.

@@ -28,6 +28,7 @@
 
 use glam::Vec3;
 use rayon::prelude::*;
+use std::cell::RefCell;
 use std::ops::Range;
 
 use crate::chunks::{CHUNK, PARALLEL_THRESHOLD};
@@ -35,7 +36,7 @@ use crate::error::{CoreError, Result};
 use crate::influence::{Influence, Mask, chunk_box};
 use crate::mesh::Topology;
 use crate::stack::{Layer, apply_per_vertex};
-use crate::tool::{BindInput, BindSetup, ToolBind};
+use crate::tool::{BindInput, BindSetup, SpareBinds, ToolBind};
 
 /// The vertices a block holds: two chunks, small enough that a block's positions and a
 /// layer's bind data for them stay in a core's cache, and below the threshold at which the
@@ -165,7 +166,40 @@ fn evaluate_block(
     start: usize,
     topology: &Topology,
 ) -> std::result::Result<bool, Failure> {
-    let mut scratch = Vec::new();
+    // The buffers this thread's block before left; taken, so that a block this thread
+    // starts while it waits inside this one (a bind's parallel chunks) finds none and makes
+    // its own.
+    let mut spare = SPARE.take();
+    let moved = evaluate_block_with(run, binds, block, start, topology, &mut spare);
+    SPARE.set(spare);
+    moved
+}
+
+thread_local! {
+    /// The buffers of the last block a thread evaluated, for its next block.
+    static SPARE: RefCell<Spare> = RefCell::default();
+}
+
+/// Buffers a block evaluation no longer needs, kept for the next block on the same thread:
+/// made again for each block, they took a bind's allocation and zeros per layer and block
+/// (`docs/performance.md`, thirty-second session).
+#[derive(Default)]
+struct Spare {
+    /// The binds of the kinds that hold per-vertex arrays.
+    binds: SpareBinds,
+    /// The deformed positions of a layer's active vertices.
+    deformed: Vec<Vec3>,
+}
+
+/// [`evaluate_block`] with the buffers of `spare`.
+fn evaluate_block_with(
+    run: &[&Layer],
+    binds: &[Shared<'_>],
+    block: &mut [Vec3],
+    start: usize,
+    topology: &Topology,
+    spare: &mut Spare,
+) -> std::result::Result<bool, Failure> {
     // The block's box, computed when a mask needs it and dropped when a layer moves a vertex.
     let mut bounds: Option<(Vec3, Vec3)> = None;
     let mut moved = false;
@@ -181,14 +215,17 @@ fn evaluate_block(
         if mask.is_empty() {
             continue;
         }
-        let own;
-        let bind = match *shared {
-            Shared::Bind(b) => b,
+        let offset = start as u32;
+        match *shared {
             Shared::Failed => {
                 return Err(Failure {
                     layer: k,
                     error: None,
                 });
+            }
+            Shared::Bind(bind) => {
+                apply_per_vertex(layer, bind, &mask, block, offset, &mut spare.deformed)
+                    .map_err(fail)?;
             }
             Shared::Setup(setup) => {
                 let input = BindInput {
@@ -196,11 +233,15 @@ fn evaluate_block(
                     topology,
                     active: &mask.indices,
                 };
-                own = layer.tool.bind_set_up(setup, &input).map_err(fail)?;
-                &own
+                let own = layer.tool.bind_set_up(setup, &input, &mut spare.binds);
+                let own = own.map_err(fail)?;
+                let applied =
+                    apply_per_vertex(layer, &own, &mask, block, offset, &mut spare.deformed);
+                // Its buffers serve the next bind of its kind, whether or not it applied.
+                spare.binds.keep(own);
+                applied.map_err(fail)?;
             }
-        };
-        apply_per_vertex(layer, bind, &mask, block, start as u32, &mut scratch).map_err(fail)?;
+        }
         bounds = None;
         moved = true;
     }

@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::basis::{KnotVector, MAX_DEGREE};
-use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots, zeroed};
+use crate::chunks::{BIND_CHUNK, Reuse, Slotted, bind_slots_in, recycled, zeroed};
 use crate::curve_pieces::BasisPieces;
 use crate::error::{CoreError, Result, check_finite, check_finite_vec3};
 use crate::lane::copy_prefix;
@@ -578,7 +578,7 @@ impl ShapeSurfaceTool {
         input: &BindInput<'_>,
         previous: Option<Reuse<'_, SurfaceBind>>,
     ) -> Result<SurfaceBind> {
-        self.bind_set_up(&self.bind_setup()?, input, previous)
+        self.bind_set_up(&self.bind_setup()?, input, previous, None)
     }
 
     /// The part of a bind that depends on the tool alone.
@@ -625,12 +625,14 @@ impl ShapeSurfaceTool {
     }
 
     /// [`ShapeSurfaceTool::bind_reusing`] with `setup`, this tool's
-    /// [`ShapeSurfaceTool::bind_setup`].
+    /// [`ShapeSurfaceTool::bind_setup`], made in the buffers of `spare`, a bind this thread
+    /// no longer needs (every value that is read is written again).
     pub(crate) fn bind_set_up(
         &self,
         setup: &SurfaceSetup,
         input: &BindInput<'_>,
         previous: Option<Reuse<'_, SurfaceBind>>,
+        spare: Option<SurfaceBind>,
     ) -> Result<SurfaceBind> {
         let SurfaceSetup {
             knots,
@@ -674,7 +676,18 @@ impl ShapeSurfaceTool {
         };
         // Every active vertex on its own, in parallel chunks, into its slot; a vertex that
         // does not project keeps an unused slot and is marked unbound after.
-        let (mut slot, active) = bind_slots(input.positions.len(), input.active);
+        let spare = spare.map_or_else(Default::default, |b| {
+            let frames = match b.frames {
+                RestFrames::PerPoint(f) => f,
+                RestFrames::Plane(_) => Vec::new(),
+            };
+            let weights = match b.bases {
+                BoundBases::Kept(w) => w,
+                BoundBases::Pieces(_) => Vec::new(),
+            };
+            (b.slot, b.points, frames, weights)
+        });
+        let (mut slot, active) = bind_slots_in(spare.0, input.positions.len(), input.active);
         let m = active.len();
         // The plane's one frame (a plane without a normal has none, and no point projects),
         // or a frame per point on a curved rest surface.
@@ -686,9 +699,14 @@ impl ShapeSurfaceTool {
             })
         });
         let per_point = plane.is_none();
-        let mut points: Vec<Bound> = zeroed(m);
-        let mut frames: Vec<RestFrame> = if per_point { zeroed(m) } else { Vec::new() };
-        let mut weights: Vec<f32> = zeroed(m * stride);
+        // The values of a point that does not project are not read (its slot says so).
+        let mut points: Vec<Bound> = recycled(spare.1, m);
+        let mut frames: Vec<RestFrame> = if per_point {
+            recycled(spare.2, m)
+        } else {
+            Vec::new()
+        };
+        let mut weights: Vec<f32> = recycled(spare.3, m * stride);
         let mut projects = zeroed(m);
         // The same knots and the same kind of frames (the plane's, the same one), as a bind
         // of the same rest state has.

@@ -118,6 +118,30 @@ pub enum ToolBind {
     ShapeSurface(Box<SurfaceBind>),
 }
 
+/// Binds that a thread made and no longer needs, one per kind whose bind holds per-vertex
+/// arrays: [`Tool::bind_set_up`] makes the next bind of that kind in their buffers instead
+/// of allocating and zeroing new ones. The blocks of a run of per-vertex layers
+/// (`fused.rs`) keep them between blocks.
+#[derive(Debug, Default)]
+pub(crate) struct SpareBinds {
+    curve: Option<CurveBind>,
+    surface: Option<Box<SurfaceBind>>,
+    axial: Option<AxialBind>,
+}
+
+impl SpareBinds {
+    /// Keeps `bind`'s buffers for the next bind of its kind (a kind without per-vertex
+    /// arrays is dropped).
+    pub(crate) fn keep(&mut self, bind: ToolBind) {
+        match bind {
+            ToolBind::Curve(b) => self.curve = Some(b),
+            ToolBind::ShapeSurface(b) => self.surface = Some(b),
+            ToolBind::Axial(b) => self.axial = Some(b),
+            _ => {}
+        }
+    }
+}
+
 impl Tool {
     /// A short name of the tool kind, for messages and UI.
     #[must_use]
@@ -233,15 +257,32 @@ impl Tool {
         })
     }
 
-    /// [`Tool::bind`] with `setup`, this tool's [`Tool::bind_setup`]. The same bits.
-    pub(crate) fn bind_set_up(&self, setup: &BindSetup, input: &BindInput<'_>) -> Result<ToolBind> {
+    /// [`Tool::bind`] with `setup`, this tool's [`Tool::bind_setup`], made in the buffers of
+    /// the bind of its kind that `spare` keeps, if any. The same bits.
+    pub(crate) fn bind_set_up(
+        &self,
+        setup: &BindSetup,
+        input: &BindInput<'_>,
+        spare: &mut SpareBinds,
+    ) -> Result<ToolBind> {
         match (self, setup) {
-            (Tool::Curve(t), BindSetup::Curve(s)) => {
-                Ok(ToolBind::Curve(t.bind_set_up(s, input, None)?))
+            (Tool::Curve(t), BindSetup::Curve(s)) => Ok(ToolBind::Curve(t.bind_set_up(
+                s,
+                input,
+                None,
+                spare.curve.take(),
+            )?)),
+            (Tool::ShapeSurface(t), BindSetup::Surface(s)) => {
+                let old = spare.surface.take().map(|b| *b);
+                Ok(ToolBind::ShapeSurface(Box::new(
+                    t.bind_set_up(s, input, None, old)?,
+                )))
             }
-            (Tool::ShapeSurface(t), BindSetup::Surface(s)) => Ok(ToolBind::ShapeSurface(Box::new(
-                t.bind_set_up(s, input, None)?,
-            ))),
+            (Tool::Axial(t), _) => Ok(ToolBind::Axial(t.bind_in(
+                input,
+                None,
+                spare.axial.take(),
+            )?)),
             _ => self.bind(input),
         }
     }
