@@ -16,7 +16,8 @@
 //! pass over the whole mesh per layer and phase, and the threads meet once per run instead
 //! of several times per layer. A bind that reads no vertex is made once for the run and
 //! serves every block, and so is what a curve's or a shape surface's bind computes from the
-//! tool alone (their pieces, knots and nets).
+//! tool alone (their pieces, knots and nets). Each thread keeps the buffers of its last
+//! block's binds and deformed positions, and makes its next block's in them ([`Spare`]).
 //!
 //! Each vertex goes through the very operations of the layer-by-layer evaluation, so it gets
 //! the same bits. A block whose box no volume of a layer reaches takes that layer's weight of
