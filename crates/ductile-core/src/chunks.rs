@@ -55,8 +55,8 @@ pub fn zeroed<T: bytemuck::Zeroable + Copy + Send + Sync>(n: usize) -> Vec<T> {
 }
 
 /// `spare`, a buffer an earlier bind on this thread no longer needs, made `n` values long
-/// for a bind that writes every value it reads: its stale values kept, zeros added after
-/// them. Without the room for `n`, [`zeroed`]. The blocks of a run of per-vertex layers
+/// for a bind that writes again every value that is later read: its stale values kept,
+/// zeros added after them. Without the room for `n`, [`zeroed`]. The blocks of a run of per-vertex layers
 /// (`fused.rs`) bind one block after another on each thread; reusing the buffers of the
 /// block before spares each bind its allocation and its zeros (`docs/performance.md`,
 /// thirty-second session).

@@ -351,6 +351,16 @@ mod tests {
         Tool::ShapeSurface(tool)
     }
 
+    /// [`surface`] of degree 4 in both directions: its bind keeps each point's bases
+    /// instead of deform evaluating them again.
+    fn quartic_surface(curved: bool) -> Tool {
+        let mut tool = surface(curved);
+        if let Tool::ShapeSurface(s) = &mut tool {
+            s.degree = (4, 4);
+        }
+        tool
+    }
+
     /// A twisted and bent axial tool along `x`.
     fn axial() -> Tool {
         let point = |x: f32| AxisPoint {
@@ -414,6 +424,18 @@ mod tests {
                 "curved surface",
                 surface(true),
                 around(Vec3::new(1.6, 0.6, 0.0), cube(0.45), false),
+            ),
+            // Two binds that keep their bases one after the other: the second is made in
+            // the first's buffers.
+            layer(
+                "quartic surface",
+                quartic_surface(false),
+                around(Vec3::new(1.0, 0.8, 0.0), sphere(0.6), false),
+            ),
+            layer(
+                "curved quartic surface",
+                quartic_surface(true),
+                around(Vec3::new(1.3, 1.0, 0.0), cube(0.5), false),
             ),
             layer(
                 "axial",
@@ -487,7 +509,8 @@ mod tests {
         assert_eq!(
             runs,
             [
-                true, true, true, true, true, true, true, false, true, false, false, true
+                true, true, true, true, true, true, true, true, true, false, true, false, false,
+                true
             ],
             "which layers a run takes"
         );
