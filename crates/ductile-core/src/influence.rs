@@ -526,10 +526,19 @@ impl ChunkBounds {
 
 /// The least and greatest of each coordinate of `points`, NaN left out; `+∞` and `−∞` for
 /// no number. In [`pulp`]'s runtime dispatch (the same code at each width): `n` points (the
-/// register's lanes) at a time in three registers of running bounds, kept by `x < lo` and
-/// `x > hi` (false for NaN). Read as floats, the points are `x, y, z, x, …`, so lane `j` of
-/// register `r` holds coordinate `(r·n + j) mod 3` throughout. Which of `−0` and `+0` a bound
-/// keeps may depend on the order; the boxes are only compared, where the two are equal.
+/// register's lanes) at a time, in two sets of three registers of running bounds, each set
+/// taking every other group of `n` points. Read as floats, the points are `x, y, z, x, …`, so
+/// lane `j` of register `r` holds coordinate `(r·n + j) mod 3` throughout. Which of `−0` and
+/// `+0` a bound keeps may depend on the order; the boxes are only compared, where the two
+/// are equal.
+///
+/// The running bounds are `min(x, lo)` and `max(x, hi)`: one instruction each, where the
+/// kept-by-compare form (`x < lo`, a select) took a compare and a blend that waited on each
+/// other; two independent sets let the processor overlap them. x86's `minps` and `maxps`
+/// return their second operand when the first is NaN, which leaves NaN out; an instruction
+/// set whose minimum returns NaN (NEON's `fmin`) gives a NaN bound instead, and the points
+/// are then read again by compare and select (`docs/performance.md`, thirty-second session:
+/// the compare form took 4 % of a two-thread evaluation's samples).
 pub(crate) fn chunk_box(points: &[Vec3]) -> (Vec3, Vec3) {
     pulp::Arch::new().dispatch(ChunkBox(points))
 }
@@ -542,38 +551,59 @@ impl pulp::WithSimd for ChunkBox<'_> {
 
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, s: S) -> (Vec3, Vec3) {
-        let n = S::F32_LANES;
         let coords: &[f32] = bytemuck::cast_slice(self.0);
-        let mut lo = [s.splat_f32s(f32::INFINITY); 3];
-        let mut hi = [s.splat_f32s(f32::NEG_INFINITY); 3];
-        let mut groups = coords.chunks_exact(3 * n);
-        for g in &mut groups {
+        let (lo, hi) = box_of::<S, false>(s, coords);
+        if lo.is_nan() || hi.is_nan() {
+            return box_of::<S, true>(s, coords);
+        }
+        (lo, hi)
+    }
+}
+
+/// The bounds of [`chunk_box`] over `coords` (points as `x, y, z, x, …`): running bounds by
+/// compare and select (`SELECT`: NaN always left out) or by minimum and maximum.
+#[inline(always)]
+fn box_of<S: pulp::Simd, const SELECT: bool>(s: S, coords: &[f32]) -> (Vec3, Vec3) {
+    let n = S::F32_LANES;
+    let mut lo = [[s.splat_f32s(f32::INFINITY); 3]; 2];
+    let mut hi = [[s.splat_f32s(f32::NEG_INFINITY); 3]; 2];
+    let mut pairs = coords.chunks_exact(6 * n);
+    for pair in &mut pairs {
+        for (set, g) in pair.chunks_exact(3 * n).enumerate() {
             for r in 0..3 {
                 let x: S::f32s =
                     bytemuck::pod_read_unaligned(bytemuck::cast_slice(&g[r * n..(r + 1) * n]));
-                lo[r] = s.select_f32s(s.less_than_f32s(x, lo[r]), x, lo[r]);
-                hi[r] = s.select_f32s(s.greater_than_f32s(x, hi[r]), x, hi[r]);
+                let (l, h) = (lo[set][r], hi[set][r]);
+                (lo[set][r], hi[set][r]) = if SELECT {
+                    (
+                        s.select_f32s(s.less_than_f32s(x, l), x, l),
+                        s.select_f32s(s.greater_than_f32s(x, h), x, h),
+                    )
+                } else {
+                    (s.min_f32s(x, l), s.max_f32s(x, h))
+                };
             }
         }
-        // The registers' lanes in order, then the points left over: float `f` of either is
-        // coordinate `f mod 3`.
-        let lo_lanes: &[f32] = bytemuck::cast_slice(&lo);
-        let hi_lanes: &[f32] = bytemuck::cast_slice(&hi);
-        let mut lo = [f32::INFINITY; 3];
-        let mut hi = [f32::NEG_INFINITY; 3];
-        let rest = groups.remainder();
-        for (f, (&l, &h)) in lo_lanes
-            .iter()
-            .zip(hi_lanes)
-            .chain(rest.iter().zip(rest))
-            .enumerate()
-        {
-            let k = f % 3;
-            lo[k] = if l < lo[k] { l } else { lo[k] };
-            hi[k] = if h > hi[k] { h } else { hi[k] };
-        }
-        (Vec3::from_array(lo), Vec3::from_array(hi))
     }
+    // The registers' lanes in order (both sets), then the floats left over: float `f` of
+    // either is coordinate `f mod 3`.
+    let (lo, hi) = (lo, hi);
+    let lo_lanes: &[f32] = bytemuck::cast_slice(&lo);
+    let hi_lanes: &[f32] = bytemuck::cast_slice(&hi);
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    let rest = pairs.remainder();
+    for (f, (&l, &h)) in lo_lanes
+        .iter()
+        .zip(hi_lanes)
+        .chain(rest.iter().zip(rest))
+        .enumerate()
+    {
+        let k = f % 3;
+        lo[k] = if l < lo[k] { l } else { lo[k] };
+        hi[k] = if h > hi[k] { h } else { hi[k] };
+    }
+    (Vec3::from_array(lo), Vec3::from_array(hi))
 }
 
 /// The vertices a layer acts on and their weights in `(0, 1]`.
