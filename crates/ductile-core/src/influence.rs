@@ -534,11 +534,13 @@ impl ChunkBounds {
 ///
 /// The running bounds are `min(x, lo)` and `max(x, hi)`: one instruction each, where the
 /// kept-by-compare form (`x < lo`, a select) took a compare and a blend that waited on each
-/// other; two independent sets let the processor overlap them. x86's `minps` and `maxps`
-/// return their second operand when the first is NaN, which leaves NaN out; an instruction
-/// set whose minimum returns NaN (NEON's `fmin`) gives a NaN bound instead, and the points
-/// are then read again by compare and select (`docs/performance.md`, thirty-second session:
-/// the compare form took 4 % of a two-thread evaluation's samples).
+/// other; two independent sets let the processor overlap them. x86's `minps(x, lo)` is
+/// `x < lo ? x : lo` (the second operand when either is NaN), the compare form's very result,
+/// zeros included, so NaN stays out. An instruction set whose minimum returns NaN (NEON's
+/// `fmin`) leaves a NaN in a register lane instead, which would hide every later point of that
+/// lane from the bounds: a NaN in any lane sends the points to be read again by compare and
+/// select (`docs/performance.md`, thirty-second session: the compare form took 4 % of a
+/// two-thread evaluation's samples).
 pub(crate) fn chunk_box(points: &[Vec3]) -> (Vec3, Vec3) {
     pulp::Arch::new().dispatch(ChunkBox(points))
 }
@@ -552,18 +554,18 @@ impl pulp::WithSimd for ChunkBox<'_> {
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, s: S) -> (Vec3, Vec3) {
         let coords: &[f32] = bytemuck::cast_slice(self.0);
-        let (lo, hi) = box_of::<S, false>(s, coords);
-        if lo.is_nan() || hi.is_nan() {
-            return box_of::<S, true>(s, coords);
+        match box_of::<S, false>(s, coords) {
+            (bounds, false) => bounds,
+            (_, true) => box_of::<S, true>(s, coords).0,
         }
-        (lo, hi)
     }
 }
 
 /// The bounds of [`chunk_box`] over `coords` (points as `x, y, z, x, …`): running bounds by
-/// compare and select (`SELECT`: NaN always left out) or by minimum and maximum.
+/// compare and select (`SELECT`: NaN always left out) or by minimum and maximum; with whether
+/// a register lane ended NaN (then the bounds miss points: see [`chunk_box`]).
 #[inline(always)]
-fn box_of<S: pulp::Simd, const SELECT: bool>(s: S, coords: &[f32]) -> (Vec3, Vec3) {
+fn box_of<S: pulp::Simd, const SELECT: bool>(s: S, coords: &[f32]) -> ((Vec3, Vec3), bool) {
     let n = S::F32_LANES;
     let mut lo = [[s.splat_f32s(f32::INFINITY); 3]; 2];
     let mut hi = [[s.splat_f32s(f32::NEG_INFINITY); 3]; 2];
@@ -590,6 +592,7 @@ fn box_of<S: pulp::Simd, const SELECT: bool>(s: S, coords: &[f32]) -> (Vec3, Vec
     let (lo, hi) = (lo, hi);
     let lo_lanes: &[f32] = bytemuck::cast_slice(&lo);
     let hi_lanes: &[f32] = bytemuck::cast_slice(&hi);
+    let nan = lo_lanes.iter().chain(hi_lanes).any(|v| v.is_nan());
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
     let rest = pairs.remainder();
@@ -603,7 +606,7 @@ fn box_of<S: pulp::Simd, const SELECT: bool>(s: S, coords: &[f32]) -> (Vec3, Vec
         lo[k] = if l < lo[k] { l } else { lo[k] };
         hi[k] = if h > hi[k] { h } else { hi[k] };
     }
-    (Vec3::from_array(lo), Vec3::from_array(hi))
+    ((Vec3::from_array(lo), Vec3::from_array(hi)), nan)
 }
 
 /// The vertices a layer acts on and their weights in `(0, 1]`.
@@ -1354,6 +1357,21 @@ pub(crate) mod tests {
                 for (w, b) in widths.into_iter().enumerate() {
                     assert_eq!(b, (lo, hi), "{n} points, NaN at {nan:?}, width {w}");
                 }
+                // The compare-and-select form that a NaN lane falls back to (no CPU this
+                // test runs on leaves one), at every width; and the lanes of the min form
+                // never hold a NaN here.
+                let select = [
+                    box_of::<_, true>(pulp::Scalar::new(), bytemuck::cast_slice(&p)),
+                    box_of::<_, true>(pulp::Scalar128b, bytemuck::cast_slice(&p)),
+                    box_of::<_, true>(pulp::Scalar256b, bytemuck::cast_slice(&p)),
+                    box_of::<_, true>(pulp::Scalar512b, bytemuck::cast_slice(&p)),
+                ];
+                for (w, (b, lane_nan)) in select.into_iter().enumerate() {
+                    assert_eq!(b, (lo, hi), "{n} points, NaN at {nan:?}, width {w}, select");
+                    assert!(!lane_nan, "the select form keeps NaN out of its lanes");
+                }
+                let min = box_of::<_, false>(pulp::Scalar256b, bytemuck::cast_slice(&p));
+                assert_eq!(min, ((lo, hi), false), "{n} points, NaN at {nan:?}, min");
             }
         }
     }
