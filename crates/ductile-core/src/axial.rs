@@ -346,20 +346,21 @@ impl AxialTool {
         spare: Option<AxialBind>,
     ) -> Result<AxialBind> {
         let rest = SampledAxis::new(self.shape, &self.rest, None, "axial tool: rest axis")?;
-        let spare = spare.map_or_else(Default::default, |b| {
-            (b.slot, b.segment, b.fraction, b.local, b.base, b.weight)
-        });
-        let (slot, active) = bind_slots_in(spare.0, input.positions.len(), input.active);
+        let (slot, segment, fraction, local, base, weight) = spare
+            .map_or_else(Default::default, |b| {
+                (b.slot, b.segment, b.fraction, b.local, b.base, b.weight)
+            });
+        let (slot, active) = bind_slots_in(slot, input.positions.len(), input.active);
         let m = active.len();
         // A vertex outside the zone keeps the stale values of `spare` but weight 0, and
         // nothing reads its other values.
         let mut bind = AxialBind {
             slot,
-            segment: recycled(spare.1, m),
-            fraction: recycled(spare.2, m),
-            local: recycled(spare.3, m),
-            base: recycled(spare.4, m),
-            weight: recycled(spare.5, m),
+            segment: recycled(segment, m),
+            fraction: recycled(fraction, m),
+            local: recycled(local, m),
+            base: recycled(base, m),
+            weight: recycled(weight, m),
             rest,
         };
         let index =

@@ -416,17 +416,17 @@ impl CurveTool {
         spare: Option<CurveBind>,
     ) -> Result<CurveBind> {
         let (evaluator, pieces) = (setup.evaluator.clone(), &setup.pieces);
-        let spare = spare.map_or_else(Default::default, |b| {
+        let (slot, params, offsets, firsts, weights) = spare.map_or_else(Default::default, |b| {
             (b.slot, b.params, b.offsets, b.firsts, b.weights)
         });
-        let (slot, active) = bind_slots_in(spare.0, input.positions.len(), input.active);
+        let (slot, active) = bind_slots_in(slot, input.positions.len(), input.active);
         let m = active.len();
         let stride = 2 * evaluator.degree() + 1;
         // Every entry is written below: a bind's own vertex, or a reused one's copy.
-        let mut params = recycled(spare.1, m);
-        let mut offsets = recycled(spare.2, m);
-        let mut firsts = recycled(spare.3, m);
-        let mut weights = recycled(spare.4, m * stride);
+        let mut params = recycled(params, m);
+        let mut offsets = recycled(offsets, m);
+        let mut firsts = recycled(firsts, m);
+        let mut weights = recycled(weights, m * stride);
         let previous = previous.filter(|p| p.bind.evaluator.degree() == evaluator.degree());
         // Every vertex on its own, in parallel chunks (the same bits as one by one): the
         // closest points of a chunk's vertices that are not reused, a lane group at a time.

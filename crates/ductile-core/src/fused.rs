@@ -92,8 +92,13 @@ pub(crate) fn evaluate_run(
         .collect();
     let work = |(b, block): (usize, &mut [Vec3])| {
         let start = b * BLOCK;
-        let moved = evaluate_block(run, &binds, block, start, topology)?;
-        Ok(moved.then_some(start..start + block.len()))
+        // The buffers this thread's block before left; taken, so that a block this thread
+        // starts while it waits inside this one (a bind's parallel chunks) finds none and
+        // makes its own.
+        let mut spare = SPARE.take();
+        let moved = evaluate_block(run, &binds, block, start, topology, &mut spare);
+        SPARE.set(spare);
+        Ok(moved?.then_some(start..start + block.len()))
     };
     // A mesh below the parallel threshold makes no parallel call of its own, as a layer's
     // passes over it make none.
@@ -158,24 +163,6 @@ struct Failure {
     error: Option<CoreError>,
 }
 
-/// Takes the block of vertices `start..` through every layer of `run` (with `binds`, one per
-/// layer); returns whether a layer moved any of them.
-fn evaluate_block(
-    run: &[&Layer],
-    binds: &[Shared<'_>],
-    block: &mut [Vec3],
-    start: usize,
-    topology: &Topology,
-) -> std::result::Result<bool, Failure> {
-    // The buffers this thread's block before left; taken, so that a block this thread
-    // starts while it waits inside this one (a bind's parallel chunks) finds none and makes
-    // its own.
-    let mut spare = SPARE.take();
-    let moved = evaluate_block_with(run, binds, block, start, topology, &mut spare);
-    SPARE.set(spare);
-    moved
-}
-
 thread_local! {
     /// The buffers of the last block a thread evaluated, for its next block.
     static SPARE: RefCell<Spare> = RefCell::default();
@@ -192,8 +179,9 @@ struct Spare {
     deformed: Vec<Vec3>,
 }
 
-/// [`evaluate_block`] with the buffers of `spare`.
-fn evaluate_block_with(
+/// Takes the block of vertices `start..` through every layer of `run` (with `binds`, one per
+/// layer), in the buffers of `spare`; returns whether a layer moved any of them.
+fn evaluate_block(
     run: &[&Layer],
     binds: &[Shared<'_>],
     block: &mut [Vec3],

@@ -589,7 +589,6 @@ fn box_of<S: pulp::Simd, const SELECT: bool>(s: S, coords: &[f32]) -> ((Vec3, Ve
     }
     // The registers' lanes in order (both sets), then the floats left over: float `f` of
     // either is coordinate `f mod 3`.
-    let (lo, hi) = (lo, hi);
     let lo_lanes: &[f32] = bytemuck::cast_slice(&lo);
     let hi_lanes: &[f32] = bytemuck::cast_slice(&hi);
     let nan = lo_lanes.iter().chain(hi_lanes).any(|v| v.is_nan());

@@ -676,7 +676,7 @@ impl ShapeSurfaceTool {
         };
         // Every active vertex on its own, in parallel chunks, into its slot; a vertex that
         // does not project keeps an unused slot and is marked unbound after.
-        let spare = spare.map_or_else(Default::default, |b| {
+        let (slot, points, frames, weights) = spare.map_or_else(Default::default, |b| {
             let frames = match b.frames {
                 RestFrames::PerPoint(f) => f,
                 RestFrames::Plane(_) => Vec::new(),
@@ -687,7 +687,7 @@ impl ShapeSurfaceTool {
             };
             (b.slot, b.points, frames, weights)
         });
-        let (mut slot, active) = bind_slots_in(spare.0, input.positions.len(), input.active);
+        let (mut slot, active) = bind_slots_in(slot, input.positions.len(), input.active);
         let m = active.len();
         // The plane's one frame (a plane without a normal has none, and no point projects),
         // or a frame per point on a curved rest surface.
@@ -700,13 +700,13 @@ impl ShapeSurfaceTool {
         });
         let per_point = plane.is_none();
         // The values of a point that does not project are not read (its slot says so).
-        let mut points: Vec<Bound> = recycled(spare.1, m);
+        let mut points: Vec<Bound> = recycled(points, m);
         let mut frames: Vec<RestFrame> = if per_point {
-            recycled(spare.2, m)
+            recycled(frames, m)
         } else {
             Vec::new()
         };
-        let mut weights: Vec<f32> = recycled(spare.3, m * stride);
+        let mut weights: Vec<f32> = recycled(weights, m * stride);
         let mut projects = zeroed(m);
         // The same knots and the same kind of frames (the plane's, the same one), as a bind
         // of the same rest state has.
